@@ -1,0 +1,29 @@
+// Damage and fracture degree (SPEC 4).
+// Damage of a block: the broken fraction of its interface (spring-point) area, 0..1; damage
+// mode: 0 undamaged, 1 tensile, 2 shear, the mode of most of its broken area.
+// Fracture degree: broken spring-point area / total spring-point area over the rock's
+// interfaces (pre-cracked joints and the unbreakable interfaces around solid charges are
+// excluded: they are not blast damage), split into tensile and shear parts, and the
+// count-based ratio.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+struct FractureDegree {
+  double area = 0, tensile = 0, shear = 0;  // area fractions
+  double count = 0;                         // count fraction
+  std::int64_t broken = 0, total = 0;       // spring points counted
+};
+
+// True for spring points that count as rock (breakable, not pre-cracked).
+bool counts_as_rock(const Model& m, std::size_t spring);
+
+FractureDegree fracture_degree(const Model& m);
+
+void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode);
+
+}  // namespace cdem

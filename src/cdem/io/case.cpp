@@ -1,0 +1,416 @@
+#include "cdem/io/case.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cdem/core/error.hpp"
+#include "cdem/io/toml_reader.hpp"
+
+namespace cdem {
+
+double TimeTable::operator()(double t) const {
+  if (points.empty()) return 1.0;
+  if (t <= points.front().first) return points.front().second;
+  if (t >= points.back().first) return points.back().second;
+  auto it = std::upper_bound(points.begin(), points.end(), t,
+                             [](double tt, const auto& p) { return tt < p.first; });
+  const auto& b = *it;
+  const auto& a = *(it - 1);
+  return a.second + (b.second - a.second) * (t - a.first) / (b.first - a.first);
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Apply "a.b.c=value" on top of the parsed document; numeric components index arrays.
+void apply_override(toml::value& root, const std::string& ov, const std::string& file) {
+  const auto eq = ov.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError(fmt::format("--set '{}': expected key=value (e.g. simulation.end_time=1e-3)", ov));
+  const std::string key = ov.substr(0, eq), val = ov.substr(eq + 1);
+  toml::value parsed;
+  try {
+    std::istringstream is("v = " + val);
+    parsed = toml::parse(is, "--set " + key);
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("--set '{}': the value is not valid TOML ({}): strings need "
+                                 "quotes, e.g. key=\"text\"",
+                                 ov, e.what()));
+  }
+  std::vector<std::string> parts;
+  std::stringstream ss(key);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  toml::value* cur = &root;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const bool last = i + 1 == parts.size();
+    const auto& p = parts[i];
+    if (cur->is_array()) {
+      std::size_t idx = 0;
+      try {
+        idx = std::stoul(p);
+      } catch (...) {
+        throw InputError(fmt::format("--set '{}': '{}' is an array in {}; index it with a number",
+                                     ov, parts[i - 1], file));
+      }
+      auto& arr = cur->as_array();
+      if (idx >= arr.size())
+        throw InputError(fmt::format("--set '{}': index {} out of range ({} has {} entries)", ov,
+                                     idx, parts[i - 1], arr.size()));
+      cur = &arr[idx];
+    } else {
+      if (!cur->is_table()) *cur = toml::table{};
+      auto& t = cur->as_table();
+      if (last) {
+        t[p] = parsed.as_table().at("v");
+        return;
+      }
+      if (!t.count(p)) t[p] = toml::table{};
+      cur = &t[p];
+    }
+    if (last) {
+      *cur = parsed.as_table().at("v");
+      return;
+    }
+  }
+}
+
+std::string resolve_path(const std::string& dir, const std::string& p) {
+  fs::path q(p);
+  return q.is_absolute() ? q.string() : (fs::path(dir) / q).lexically_normal().string();
+}
+
+Sym6 sym6(const TomlTable& t, const std::string& key) {
+  const auto a = t.numbers(key);
+  if (a.size() != 6 && a.size() != 4)
+    throw InputError(fmt::format("{}: expected 6 numbers [xx, yy, zz, xy, yz, xz] (2D: 4 numbers "
+                                 "[xx, yy, zz, xy]), got {}",
+                                 t.where(key), a.size()));
+  Sym6 s{};
+  for (std::size_t i = 0; i < a.size(); ++i) s[i] = a[i];
+  return s;
+}
+
+GenerateSpec parse_generate(const TomlTable& g) {
+  g.check_known({"shape", "origin", "size", "element_size", "quads", "hole", "refine", "ring_width",
+                 "ring_element_size", "region"});
+  GenerateSpec s;
+  s.shape = g.choice("shape", {"rectangle", "box", "cylinder"}, "");
+  s.origin = g.vec("origin", {});
+  s.size = g.vec("size");
+  const int need = s.shape == "rectangle" ? 2 : 3;
+  if (s.shape == "cylinder") {
+    if (!(s.size.x > 0 && s.size.z > 0))
+      throw InputError(fmt::format("{}: a cylinder needs size = [radius, 0, height], both > 0",
+                                   g.where("size")));
+  } else {
+    if (!(s.size.x > 0 && s.size.y > 0 && (need == 2 || s.size.z > 0)))
+      throw InputError(fmt::format("{}: expected {} positive lengths", g.where("size"), need));
+  }
+  s.element_size = g.positive("element_size");
+  s.quads = g.boolean("quads", false);
+  s.region = g.string("region", "rock");
+  s.ring_width = g.non_negative("ring_width", 0.0);
+  s.ring_element_size = g.positive("ring_element_size", s.element_size);
+  for (const auto& h : g.array_of_tables("hole")) {
+    h.check_known({"center", "radius", "axis", "depth", "region"});
+    HoleSpec hs;
+    hs.center = h.vec("center");
+    hs.radius = h.positive("radius");
+    hs.axis = h.vec("axis", need == 2 ? Vec3{0, -1, 0} : Vec3{0, 0, -1});
+    if (norm(hs.axis) == 0) throw InputError(fmt::format("{}: the axis is a zero vector", h.where("axis")));
+    hs.axis = normalized(hs.axis);
+    hs.depth = h.non_negative("depth", 0.0);
+    hs.region = h.string("region", "");
+    s.holes.push_back(hs);
+  }
+  for (const auto& r : g.array_of_tables("refine")) {
+    r.check_known({"point", "size", "radius"});
+    RefineSpec rs;
+    rs.point = r.vec("point");
+    rs.size = r.positive("size");
+    rs.radius = r.positive("radius");
+    s.refine.push_back(rs);
+  }
+  return s;
+}
+
+}  // namespace
+
+Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
+  if (!fs::exists(path)) throw InputError(fmt::format("cannot open case file '{}': no such file", path));
+  toml::value root;
+  try {
+    root = toml::parse(path);
+  } catch (const toml::syntax_error& e) {
+    throw InputError(fmt::format("{}: TOML syntax error:\n{}", path, e.what()));
+  } catch (const std::exception& e) {
+    throw InputError(fmt::format("{}: cannot read: {}", path, e.what()));
+  }
+  for (const auto& ov : overrides) apply_override(root, ov, path);
+
+  Case c;
+  c.path = path;
+  c.dir = fs::absolute(path).parent_path().string();
+  const TomlTable top(root, path, "");
+  top.check_known({"title", "mesh", "simulation", "material", "interface", "boundary",
+                   "damping_zone", "monitor", "initial_stress"});
+  c.title = top.string("title", fs::path(path).stem().string());
+
+  // ---- mesh ----
+  const auto mesh = top.sub("mesh");
+  if (!mesh) throw InputError(fmt::format("{}: missing table [mesh] (give 'file' or [mesh.generate])", path));
+  mesh->check_known({"file", "generate"});
+  if (mesh->has("file") == mesh->has("generate"))
+    throw InputError(fmt::format("{}: [mesh] needs exactly one of 'file' (a Gmsh .msh) or "
+                                 "[mesh.generate]",
+                                 path));
+  if (mesh->has("file")) {
+    c.mesh_file = resolve_path(c.dir, mesh->string("file"));
+  } else {
+    c.generate = parse_generate(*mesh->sub("generate"));
+  }
+
+  // ---- simulation ----
+  const auto sim = top.sub("simulation");
+  if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
+  sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
+                    "history_interval", "release_distance_factor", "energy_blowup_factor",
+                    "max_steps", "gravity"});
+  c.end_time = sim->positive("end_time");
+  c.dt_safety = sim->positive("dt_safety", 0.5);
+  if (c.dt_safety > 1.0)
+    throw InputError(fmt::format("{}: expected a value in (0, 1], got {} (above 1 the explicit "
+                                 "scheme is unstable)",
+                                 sim->where("dt_safety"), c.dt_safety));
+  c.fixed_dt = sim->non_negative("dt", 0.0);
+  c.threads = static_cast<int>(sim->integer("threads", 0));
+  if (c.threads < 0) throw InputError(fmt::format("{}: expected >= 0", sim->where("threads")));
+  c.output_interval = sim->non_negative("output_interval", 0.0);
+  if (sim->has("output_times")) c.output_times = sim->numbers("output_times");
+  for (double t : c.output_times)
+    if (t < 0 || t > c.end_time)
+      throw InputError(fmt::format("{}: {} is outside [0, end_time = {}]", sim->where("output_times"),
+                                   t, c.end_time));
+  c.history_interval = sim->non_negative("history_interval", c.end_time / 200.0);
+  c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
+  c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
+  c.max_steps = sim->integer("max_steps", 0);
+  c.gravity = sim->vec("gravity", {});
+
+  // ---- block materials ----
+  const auto mats = top.array_of_tables("material");
+  if (mats.empty())
+    throw InputError(fmt::format("{}: no [[material]]: at least one is needed (density, "
+                                 "youngs_modulus, poisson_ratio, regions)",
+                                 path));
+  for (const auto& t : mats) {
+    t.check_known({"name", "regions", "density", "youngs_modulus", "poisson_ratio", "damping",
+                   "local_damping", "explosive"});
+    BlockMaterial m;
+    m.name = t.string("name");
+    m.regions = t.strings("regions");
+    if (m.regions.empty()) throw InputError(fmt::format("{}: lists no region", t.where("regions")));
+    m.density = t.positive("density");
+    m.explosive = t.string("explosive", "");
+    m.youngs = m.explosive.empty() ? t.positive("youngs_modulus") : t.positive("youngs_modulus", 1e9);
+    m.poisson = t.number("poisson_ratio", m.explosive.empty() ? -1.0 : 0.25);
+    if (!(m.poisson > -1.0 && m.poisson < 0.5))
+      throw InputError(fmt::format("{}: expected a Poisson ratio in (-1, 0.5), got {}",
+                                   t.where("poisson_ratio"), m.poisson));
+    m.damping = t.non_negative("damping", 0.0);
+    m.local_damping = t.non_negative("local_damping", 0.0);
+    if (m.local_damping >= 1.0)
+      throw InputError(fmt::format("{}: expected a value in [0, 1)", t.where("local_damping")));
+    for (const auto& o : c.materials)
+      if (o.name == m.name) throw InputError(fmt::format("{}: duplicate material name '{}'", t.where("name"), m.name));
+    c.materials.push_back(m);
+  }
+
+  // ---- interface materials ----
+  for (const auto& t : top.array_of_tables("interface")) {
+    t.check_known({"name", "pairs", "default", "law", "tensile_strength", "cohesion",
+                   "friction_angle", "residual_friction_angle", "dilation_angle",
+                   "tensile_fracture_energy", "shear_fracture_energy", "stiffness_factor",
+                   "precracked"});
+    InterfaceMaterial im;
+    im.name = t.string("name");
+    const std::string law = t.choice("law", {"mohr_coulomb", "fracture_energy", "elastic"}, "mohr_coulomb");
+    im.law = law == "mohr_coulomb" ? InterfaceLaw::MohrCoulomb
+             : law == "fracture_energy" ? InterfaceLaw::FractureEnergy : InterfaceLaw::Elastic;
+    if (im.law != InterfaceLaw::Elastic) {
+      im.tensile_strength = t.non_negative("tensile_strength", -1);
+      if (!t.has("tensile_strength")) t.fail("tensile_strength", "a number >= 0 (Pa)");
+      im.cohesion = t.non_negative("cohesion", 0);
+      if (!t.has("cohesion")) t.fail("cohesion", "a number >= 0 (Pa)");
+    }
+    im.friction_deg = t.number("friction_angle", 0.0);
+    im.residual_friction_deg = t.number("residual_friction_angle", -1.0);
+    im.dilation_deg = t.number("dilation_angle", 0.0);
+    for (const char* k : {"friction_angle", "dilation_angle"})
+      if (t.has(k) && (t.number(k) < 0 || t.number(k) >= 90))
+        throw InputError(fmt::format("{}: expected an angle in degrees in [0, 90)", t.where(k)));
+    if (t.has("residual_friction_angle") && (im.residual_friction_deg < 0 || im.residual_friction_deg >= 90))
+      throw InputError(fmt::format("{}: expected an angle in degrees in [0, 90)", t.where("residual_friction_angle")));
+    if (im.law == InterfaceLaw::FractureEnergy) {
+      im.gt = t.positive("tensile_fracture_energy");
+      im.gs = t.positive("shear_fracture_energy");
+    }
+    im.stiffness_factor = t.positive("stiffness_factor", 10.0);
+    im.precracked = t.boolean("precracked", false);
+    im.is_default = t.boolean("default", false);
+    if (t.has("pairs")) {
+      const toml::value* r = t.raw("pairs");
+      if (!r->is_array()) t.fail("pairs", "an array of [region, region] pairs");
+      for (const auto& e : r->as_array()) {
+        if (!e.is_array() || e.as_array().size() != 2 || !e.as_array()[0].is_string() ||
+            !e.as_array()[1].is_string())
+          throw InputError(fmt::format("{}: expected pairs like [[\"rock\", \"rock\"]]", t.where("pairs")));
+        im.pairs.emplace_back(e.as_array()[0].as_string().str, e.as_array()[1].as_string().str);
+      }
+    }
+    c.interfaces.push_back(im);
+  }
+
+  // ---- boundaries ----
+  for (const auto& t : top.array_of_tables("boundary")) {
+    t.check_known({"faces", "type", "velocity", "pressure", "table"});
+    BoundaryCondition b;
+    b.faces = t.string("faces");
+    const std::string ty = t.choice("type", {"fixed", "roller", "non_reflecting", "velocity", "pressure"}, "");
+    b.type = ty == "fixed" ? BoundaryType::Fixed
+             : ty == "roller" ? BoundaryType::Roller
+             : ty == "non_reflecting" ? BoundaryType::NonReflecting
+             : ty == "velocity" ? BoundaryType::Velocity : BoundaryType::Pressure;
+    if (b.type == BoundaryType::Velocity) {
+      b.direction = t.vec("velocity");
+      b.value = 1.0;
+    }
+    if (b.type == BoundaryType::Pressure) b.value = t.number("pressure");
+    if (t.has("table")) b.table.points = t.table("table");
+    c.boundaries.push_back(b);
+  }
+
+  for (const auto& t : top.array_of_tables("damping_zone")) {
+    t.check_known({"region", "max_damping", "exponent"});
+    DampingZone z;
+    z.region = t.string("region");
+    z.max_damping = t.positive("max_damping");
+    z.exponent = t.positive("exponent", 2.0);
+    c.damping_zones.push_back(z);
+  }
+  for (const auto& t : top.array_of_tables("monitor")) {
+    t.check_known({"name", "point"});
+    Monitor mo;
+    mo.name = t.string("name");
+    mo.point = t.vec("point");
+    for (const auto& o : c.monitors)
+      if (o.name == mo.name) throw InputError(fmt::format("{}: duplicate monitor name '{}'", t.where("name"), mo.name));
+    c.monitors.push_back(mo);
+  }
+  if (const auto is = top.sub("initial_stress")) {
+    is->check_known({"stress", "gradient", "reference_level"});
+    c.initial_stress.enabled = true;
+    c.initial_stress.at_reference = sym6(*is, "stress");
+    if (is->has("gradient")) c.initial_stress.gradient = sym6(*is, "gradient");
+    c.initial_stress.reference_level = is->number("reference_level", 0.0);
+  }
+  return c;
+}
+
+namespace {
+std::string vec_str(Vec3 v) { return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x, v.y, v.z); }
+std::string q(const std::string& s) {
+  std::string o = "\"";
+  for (char ch : s) {
+    if (ch == '"' || ch == '\\') o += '\\';
+    o += ch;
+  }
+  return o + "\"";
+}
+std::string sym_str(const Sym6& s) {
+  return fmt::format("[{:.17g}, {:.17g}, {:.17g}, {:.17g}, {:.17g}, {:.17g}]", s[0], s[1], s[2], s[3], s[4], s[5]);
+}
+std::string table_str(const TimeTable& t) {
+  std::string o = "[";
+  for (const auto& p : t.points) o += fmt::format("{}[{:.17g}, {:.17g}]", o.size() > 1 ? ", " : "", p.first, p.second);
+  return o + "]";
+}
+}  // namespace
+
+std::string resolved_case_toml(const Case& c) {
+  std::string o;
+  o += fmt::format("# Fully resolved case: every default filled in. Run it again with\n"
+                   "#   cdemblast run <this file>\n# Source: {}\n\n", c.path);
+  o += fmt::format("title = {}\n\n[mesh]\n", q(c.title));
+  if (!c.mesh_file.empty()) {
+    o += fmt::format("file = {}\n", q(c.mesh_file));
+  } else {
+    const auto& g = *c.generate;
+    o += fmt::format("[mesh.generate]\nshape = {}\norigin = {}\nsize = {}\nelement_size = {:.17g}\n"
+                     "quads = {}\nregion = {}\nring_width = {:.17g}\nring_element_size = {:.17g}\n",
+                     q(g.shape), vec_str(g.origin), vec_str(g.size), g.element_size, g.quads,
+                     q(g.region), g.ring_width, g.ring_element_size);
+    for (const auto& h : g.holes)
+      o += fmt::format("[[mesh.generate.hole]]\ncenter = {}\nradius = {:.17g}\naxis = {}\n"
+                       "depth = {:.17g}\nregion = {}\n",
+                       vec_str(h.center), h.radius, vec_str(h.axis), h.depth, q(h.region));
+    for (const auto& r : g.refine)
+      o += fmt::format("[[mesh.generate.refine]]\npoint = {}\nsize = {:.17g}\nradius = {:.17g}\n",
+                       vec_str(r.point), r.size, r.radius);
+  }
+  o += fmt::format("\n[simulation]\nend_time = {:.17g}\ndt_safety = {:.17g}\ndt = {:.17g}\n"
+                   "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
+                   "release_distance_factor = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
+                   "max_steps = {}\ngravity = {}\n",
+                   c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
+                   c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
+                   c.max_steps, vec_str(c.gravity));
+  o += "output_times = [";
+  for (std::size_t i = 0; i < c.output_times.size(); ++i)
+    o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);
+  o += "]\n";
+  for (const auto& m : c.materials) {
+    o += fmt::format("\n[[material]]\nname = {}\nregions = [", q(m.name));
+    for (std::size_t i = 0; i < m.regions.size(); ++i) o += (i ? ", " : "") + q(m.regions[i]);
+    o += fmt::format("]\ndensity = {:.17g}\nyoungs_modulus = {:.17g}\npoisson_ratio = {:.17g}\n"
+                     "damping = {:.17g}\nlocal_damping = {:.17g}\n",
+                     m.density, m.youngs, m.poisson, m.damping, m.local_damping);
+    if (!m.explosive.empty()) o += fmt::format("explosive = {}\n", q(m.explosive));
+  }
+  for (const auto& im : c.interfaces) {
+    o += fmt::format("\n[[interface]]\nname = {}\nlaw = {}\ndefault = {}\npairs = [", q(im.name),
+                     q(name_of(im.law)), im.is_default);
+    for (std::size_t i = 0; i < im.pairs.size(); ++i)
+      o += fmt::format("{}[{}, {}]", i ? ", " : "", q(im.pairs[i].first), q(im.pairs[i].second));
+    o += fmt::format("]\ntensile_strength = {:.17g}\ncohesion = {:.17g}\nfriction_angle = {:.17g}\n"
+                     "residual_friction_angle = {:.17g}\ndilation_angle = {:.17g}\n"
+                     "stiffness_factor = {:.17g}\nprecracked = {}\n",
+                     im.tensile_strength, im.cohesion, im.friction_deg, im.residual_friction(),
+                     im.dilation_deg, im.stiffness_factor, im.precracked);
+    if (im.law == InterfaceLaw::FractureEnergy)
+      o += fmt::format("tensile_fracture_energy = {:.17g}\nshear_fracture_energy = {:.17g}\n", im.gt, im.gs);
+  }
+  for (const auto& b : c.boundaries) {
+    o += fmt::format("\n[[boundary]]\nfaces = {}\ntype = {}\n", q(b.faces), q(name_of(b.type)));
+    if (b.type == BoundaryType::Velocity) o += fmt::format("velocity = {}\n", vec_str(b.direction));
+    if (b.type == BoundaryType::Pressure) o += fmt::format("pressure = {:.17g}\n", b.value);
+    o += fmt::format("table = {}\n", table_str(b.table));
+  }
+  for (const auto& z : c.damping_zones)
+    o += fmt::format("\n[[damping_zone]]\nregion = {}\nmax_damping = {:.17g}\nexponent = {:.17g}\n",
+                     q(z.region), z.max_damping, z.exponent);
+  for (const auto& mo : c.monitors)
+    o += fmt::format("\n[[monitor]]\nname = {}\npoint = {}\n", q(mo.name), vec_str(mo.point));
+  if (c.initial_stress.enabled)
+    o += fmt::format("\n[initial_stress]\nstress = {}\ngradient = {}\nreference_level = {:.17g}\n",
+                     sym_str(c.initial_stress.at_reference), sym_str(c.initial_stress.gradient),
+                     c.initial_stress.reference_level);
+  return o;
+}
+
+}  // namespace cdem

@@ -1,0 +1,97 @@
+// A case file (TOML) parsed and validated into a Case before anything runs. Every error names
+// the file, the key and what was expected (InputError). See docs/case_reference.md.
+#pragma once
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cdem/core/vec3.hpp"
+#include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/model/materials.hpp"
+
+namespace cdem {
+
+// A function of time given as a table of (t, value) points, linearly interpolated, constant
+// before the first and after the last point.
+struct TimeTable {
+  std::vector<std::pair<double, double>> points{{0.0, 1.0}};
+  double operator()(double t) const;
+};
+
+enum class BoundaryType { Fixed, Roller, NonReflecting, Velocity, Pressure };
+inline const char* name_of(BoundaryType b) {
+  switch (b) {
+    case BoundaryType::Fixed: return "fixed";
+    case BoundaryType::Roller: return "roller";
+    case BoundaryType::NonReflecting: return "non_reflecting";
+    case BoundaryType::Velocity: return "velocity";
+    case BoundaryType::Pressure: return "pressure";
+  }
+  return "?";
+}
+
+struct BoundaryCondition {
+  std::string faces;        // face set name
+  BoundaryType type = BoundaryType::Fixed;
+  Vec3 direction{};         // velocity: the velocity vector scaled by `value(t)` (m/s)
+  double value = 0;         // pressure (Pa, positive pushes into the body) or velocity scale
+  TimeTable table;          // multiplies value
+};
+
+struct DampingZone {
+  std::string region;       // the zone's region
+  double max_damping = 0;   // mass-proportional coefficient at the outer edge (1/s)
+  double exponent = 2.0;    // grading mu = mu_max (d / d_max)^exponent from the inner edge
+};
+
+struct Monitor {
+  std::string name;
+  Vec3 point;
+};
+
+struct InitialStress {
+  bool enabled = false;
+  Sym6 at_reference{};      // stress at the reference level (Pa, tension positive)
+  Sym6 gradient{};          // d(sigma)/d(depth) (Pa/m); depth = reference_level - z (3D) or - y (2D)
+  double reference_level = 0;
+};
+
+struct Case {
+  std::string path;         // the case file (for messages and relative paths)
+  std::string dir;          // its directory
+  std::string title;
+
+  // [mesh]
+  std::string mesh_file;    // absolute path, or empty when generated
+  std::optional<GenerateSpec> generate;
+
+  // [simulation]
+  double end_time = 0;      // s
+  double dt_safety = 0.5;
+  double fixed_dt = 0;      // > 0: use this dt (must be below the stable one)
+  int threads = 0;          // 0: all cores
+  double output_interval = 0;           // field output (VTU) period, s (0: only the end)
+  std::vector<double> output_times;     // explicit field output times (added to the period)
+  double history_interval = 0;          // monitors, energy, fracture degree, s (0: ~200 samples)
+  double release_distance_factor = 0.5; // broken pair released beyond this x block size
+  double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
+  std::int64_t max_steps = 0;           // 0: unlimited
+
+  Vec3 gravity{};
+  std::vector<BlockMaterial> materials;
+  std::vector<InterfaceMaterial> interfaces;
+  std::vector<BoundaryCondition> boundaries;
+  std::vector<DampingZone> damping_zones;
+  std::vector<Monitor> monitors;
+  InitialStress initial_stress;
+};
+
+// Parse and validate. `overrides` are "dotted.key=value" strings applied on top of the file
+// (the value is TOML: 3e-3, "text", [1, 2]). Throws InputError.
+Case load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// The fully resolved case (every default filled in) as TOML text.
+std::string resolved_case_toml(const Case& c);
+
+}  // namespace cdem

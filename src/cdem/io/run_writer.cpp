@@ -1,0 +1,162 @@
+#include "cdem/io/run_writer.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "cdem/analysis/damage.hpp"
+#include "cdem/analysis/monitors.hpp"
+
+namespace cdem {
+namespace fs = std::filesystem;
+
+namespace {
+std::FILE* open_csv(const std::string& path, const std::string& header) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+  std::fputs(header.c_str(), f);
+  return f;
+}
+}  // namespace
+
+std::string json_string(const std::string& s) {
+  std::string o = "\"";
+  for (char ch : s) {
+    if (ch == '"' || ch == '\\') o += '\\', o += ch;
+    else if (ch == '\n') o += "\\n";
+    else if (static_cast<unsigned char>(ch) < 0x20) o += fmt::format("\\u{:04x}", static_cast<int>(ch));
+    else o += ch;
+  }
+  return o + "\"";
+}
+std::string json_number(double x) { return std::isfinite(x) ? fmt::format("{:.10g}", x) : "null"; }
+
+void write_json(const std::string& path, const std::vector<std::pair<std::string, std::string>>& kv) {
+  std::ofstream o(path);
+  if (!o) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+  o << "{\n";
+  for (std::size_t i = 0; i < kv.size(); ++i)
+    o << "  " << json_string(kv[i].first) << ": " << kv[i].second << (i + 1 < kv.size() ? ",\n" : "\n");
+  o << "}\n";
+}
+
+RunWriter::RunWriter(const std::string& dir, const Case& c) : dir_(dir), case_(c) {
+  fs::create_directories(fs::path(dir) / "fields");
+  fs::create_directories(fs::path(dir) / "cracks");
+  {
+    std::ofstream o(fs::path(dir) / "case.resolved.toml");
+    if (!o) throw std::runtime_error(fmt::format("cannot write into '{}'", dir));
+    o << resolved_case_toml(c);
+  }
+  fields_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "fields.pvd").string());
+  cracks_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "cracks.pvd").string());
+  monitors_ = open_csv((fs::path(dir) / "monitors.csv").string(),
+                       "time,monitor,sxx,syy,szz,sxy,syz,sxz,von_mises,pressure,ux,uy,uz,vx,vy,vz\n");
+  energy_ = open_csv((fs::path(dir) / "energy.csv").string(),
+                     "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
+                     "explosive_work,damping,fracture,initial,balance,error\n");
+  fracture_ = open_csv((fs::path(dir) / "fracture.csv").string(),
+                       "time,degree_area,tensile_area,shear_area,degree_count,broken,total\n");
+}
+
+RunWriter::~RunWriter() {
+  for (auto* f : {monitors_, energy_, fracture_})
+    if (f) std::fclose(f);
+}
+
+void RunWriter::flush() {
+  for (auto* f : {monitors_, energy_, fracture_})
+    if (f) std::fflush(f);
+}
+
+void RunWriter::write_fields(const Model& m, double t) {
+  const std::string name = fmt::format("{:04d}", frame_++);
+  // ---- blocks, each with its own nodes (cracks open as gaps) ----
+  VtuMesh vm;
+  vm.points = m.x;
+  const std::size_t nb = m.n_blocks();
+  vm.types.reserve(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) vm.connectivity.push_back(n);
+    vm.offsets.push_back(static_cast<std::int64_t>(vm.connectivity.size()));
+    vm.types.push_back(m.block_type[b] == ElemType::Tri3   ? kVtkTriangle
+                       : m.block_type[b] == ElemType::Quad4 ? kVtkQuad : kVtkTetra);
+  }
+  VtuArray disp{"displacement", 3, {}, {}}, vel{"velocity", 3, {}, {}};
+  for (std::size_t n = 0; n < m.n_nodes(); ++n) {
+    const Vec3 u = m.x[n] - m.X[n];
+    disp.f64.insert(disp.f64.end(), {u.x, u.y, u.z});
+    vel.f64.insert(vel.f64.end(), {m.v[n].x, m.v[n].y, m.v[n].z});
+  }
+  vm.point_data = {std::move(disp), std::move(vel)};
+  std::vector<double> damage;
+  std::vector<std::int32_t> mode;
+  block_damage(m, damage, mode);
+  VtuArray stress{"stress", 6, {}, {}}, pres{"pressure", 1, {}, {}}, vmis{"von_mises", 1, {}, {}},
+      dmg{"damage", 1, damage, {}}, dmode{"damage_mode", 1, {}, mode}, reg{"region", 1, {}, {}},
+      jr{"volume_ratio", 1, m.vol_ratio, {}};
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Sym6& s = m.stress[b];
+    stress.f64.insert(stress.f64.end(), s.begin(), s.end());
+    pres.f64.push_back(pressure(s));
+    vmis.f64.push_back(von_mises(s));
+    reg.i32.push_back(m.block_region[b]);
+  }
+  vm.cell_data = {std::move(stress), std::move(pres), std::move(vmis), std::move(dmg),
+                  std::move(dmode), std::move(reg), std::move(jr)};
+  const std::string rel = "fields/fields_" + name + ".vtu";
+  write_vtu((fs::path(dir_) / rel).string(), vm);
+  fields_pvd_->add(t, rel);
+
+  // ---- cracks: interfaces with at least one broken (rock) spring point ----
+  VtuMesh cm;
+  VtuArray cmode{"mode", 1, {}, {}}, cfrac{"broken_fraction", 1, {}, {}}, ctime{"break_time", 1, {}, {}};
+  const int np = m.springs_per_iface;
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    int broken = 0, shear = 0;
+    double tb = 1e300;
+    for (int q = 0; q < np; ++q) {
+      const auto s = i * np + q;
+      if (m.sp_state[s] == kIntact || !counts_as_rock(m, s)) continue;
+      ++broken;
+      shear += m.sp_mode[s] == kModeShear;
+      tb = std::min(tb, static_cast<double>(m.sp_break_time[s]));
+    }
+    if (!broken) continue;
+    for (int q = 0; q < np; ++q) {
+      cm.points.push_back(m.x[m.sp_a[i * np + q]]);
+      cm.connectivity.push_back(static_cast<std::int64_t>(cm.points.size() - 1));
+    }
+    cm.offsets.push_back(static_cast<std::int64_t>(cm.connectivity.size()));
+    cm.types.push_back(np == 2 ? kVtkLine : kVtkTriangle);
+    cmode.i32.push_back(2 * shear > broken ? 2 : 1);
+    cfrac.f64.push_back(static_cast<double>(broken) / np);
+    ctime.f64.push_back(tb);
+  }
+  cm.cell_data = {std::move(cmode), std::move(cfrac), std::move(ctime)};
+  const std::string crel = "cracks/cracks_" + name + ".vtu";
+  write_vtu((fs::path(dir_) / crel).string(), cm);
+  cracks_pvd_->add(t, crel);
+}
+
+void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
+                              const std::vector<std::int32_t>& monitor_blocks) {
+  for (std::size_t k = 0; k < monitor_blocks.size(); ++k) {
+    const MonitorSample s = sample_block(m, monitor_blocks[k]);
+    std::fprintf(monitors_, "%.9g,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n",
+                 t, case_.monitors[k].name.c_str(), s.stress[0], s.stress[1], s.stress[2],
+                 s.stress[3], s.stress[4], s.stress[5], s.von_mises, s.pressure, s.displacement.x,
+                 s.displacement.y, s.displacement.z, s.velocity.x, s.velocity.y, s.velocity.z);
+  }
+  std::fprintf(energy_, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", t, e.kinetic,
+               e.block_strain, e.spring_strain, e.external_work, e.gravity_work, e.explosive_work,
+               e.damping, e.fracture, e.initial, e.balance, e.error);
+  const FractureDegree fd = fracture_degree(m);
+  std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld\n", t, fd.area, fd.tensile, fd.shear,
+               fd.count, static_cast<long long>(fd.broken), static_cast<long long>(fd.total));
+}
+
+}  // namespace cdem

@@ -1,0 +1,376 @@
+// VTK XML UnstructuredGrid (.vtu) and collection (.pvd) writers; the format is described in
+// vtu.hpp. The XML header is formatted first (offsets need every array's encoded size), then
+// the arrays are streamed: uncompressed ones straight from the caller's vectors, compressed
+// ones from 1 MiB zlib blocks compressed in parallel beforehand.
+#include "cdem/io/vtu.hpp"
+
+#include <fmt/format.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <set>
+#include <stdexcept>
+#include <type_traits>
+
+namespace cdem {
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "the VTU writer stores native bytes and declares LittleEndian");
+static_assert(std::is_standard_layout_v<Vec3> && sizeof(Vec3) == 3 * sizeof(double),
+              "points are written straight from the Vec3 array");
+
+constexpr std::uint64_t kBlockSize = std::uint64_t{1} << 20;  // uncompressed zlib block
+constexpr int kZlibLevel = 1;                                 // Z_BEST_SPEED
+
+// Escapes a string for an XML attribute value in double quotes.
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+bool has_control_char(const std::string& s) {
+  return std::any_of(s.begin(), s.end(),
+                     [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
+}
+
+std::string errno_text() { return std::strerror(errno); }
+
+// A file written through `path.tmp` and renamed onto `path` by commit(); removed if not
+// committed. Every failure throws std::runtime_error naming `path`.
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::string& path) : path_(path), tmp_(path + ".tmp") {
+    file_ = std::fopen(tmp_.c_str(), "wb");
+    if (!file_)
+      throw std::runtime_error(
+          fmt::format("cannot write '{}': cannot create '{}': {}", path_, tmp_, errno_text()));
+    std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  }
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  ~AtomicFile() {
+    if (file_) {
+      std::fclose(file_);
+      std::remove(tmp_.c_str());
+    }
+  }
+
+  void write(const void* data, std::size_t size) {
+    if (size > 0 && std::fwrite(data, 1, size, file_) != size)
+      throw std::runtime_error(
+          fmt::format("cannot write '{}': write to '{}' failed: {}", path_, tmp_, errno_text()));
+  }
+  void write(const std::string& s) { write(s.data(), s.size()); }
+
+  void commit() {
+    std::string why;
+    if (std::fflush(file_) != 0) why = errno_text();
+    if (std::fclose(file_) != 0 && why.empty()) why = errno_text();
+    file_ = nullptr;
+    if (!why.empty()) {
+      std::remove(tmp_.c_str());
+      throw std::runtime_error(
+          fmt::format("cannot write '{}': closing '{}' failed: {}", path_, tmp_, why));
+    }
+    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+      why = errno_text();
+      std::remove(tmp_.c_str());
+      throw std::runtime_error(
+          fmt::format("cannot write '{}': renaming '{}' failed: {}", path_, tmp_, why));
+    }
+  }
+
+ private:
+  std::string path_, tmp_;
+  std::FILE* file_ = nullptr;
+};
+
+// Number of nodes of the fixed-size VTK cell types, 0 for any other type.
+int nodes_of_cell_type(std::uint8_t type) {
+  switch (type) {
+    case kVtkVertex:
+      return 1;
+    case kVtkLine:
+      return 2;
+    case kVtkTriangle:
+      return 3;
+    case kVtkQuad:
+      return 4;
+    case kVtkTetra:
+      return 4;
+    case kVtkHexahedron:
+      return 8;
+    case kVtkWedge:
+      return 6;
+    case kVtkPyramid:
+      return 5;
+    default:
+      return 0;
+  }
+}
+
+void check_arrays(const std::string& path, const std::vector<VtuArray>& arrays, std::size_t n,
+                  const char* where) {
+  std::set<std::string> names;
+  for (const VtuArray& a : arrays) {
+    const auto bad = [&](const std::string& what) {
+      return std::invalid_argument(
+          fmt::format("write_vtu('{}'): {} array '{}': {}", path, where, a.name, what));
+    };
+    if (a.name.empty() || has_control_char(a.name))
+      throw bad("the name must be non-empty and without control characters");
+    if (!names.insert(a.name).second) throw bad("the name is used twice");
+    if (a.components < 1) throw bad(fmt::format("{} components (at least 1)", a.components));
+    if (!a.f64.empty() && !a.i32.empty()) throw bad("both f64 and i32 values are set");
+    const std::size_t size = a.i32.empty() ? a.f64.size() : a.i32.size();
+    const std::size_t expected = n * static_cast<std::size_t>(a.components);
+    if (size != expected)
+      throw bad(fmt::format("{} values, expected {} ({} {}s x {} components)", size, expected, n,
+                            where, a.components));
+  }
+}
+
+void check_mesh(const std::string& path, const VtuMesh& mesh) {
+  const auto bad = [&](const std::string& what) {
+    return std::invalid_argument(fmt::format("write_vtu('{}'): {}", path, what));
+  };
+  const std::size_t ncells = mesh.types.size();
+  if (mesh.offsets.size() != ncells)
+    throw bad(fmt::format("{} cell offsets for {} cell types", mesh.offsets.size(), ncells));
+  std::int64_t begin = 0;
+  for (std::size_t c = 0; c < ncells; ++c) {
+    const std::int64_t end = mesh.offsets[c];
+    if (end < begin || end > static_cast<std::int64_t>(mesh.connectivity.size()))
+      throw bad(fmt::format("cell {}: end offset {} outside [{}, {}]", c, end, begin,
+                            mesh.connectivity.size()));
+    const int nodes = nodes_of_cell_type(mesh.types[c]);
+    if (nodes > 0 && end - begin != nodes)
+      throw bad(fmt::format("cell {}: VTK type {} needs {} nodes, got {}", c, mesh.types[c], nodes,
+                            end - begin));
+    begin = end;
+  }
+  if (begin != static_cast<std::int64_t>(mesh.connectivity.size()))
+    throw bad(fmt::format("the cells use {} connectivity entries of {}", begin,
+                          mesh.connectivity.size()));
+  const auto npoints = static_cast<std::int64_t>(mesh.points.size());
+  for (std::size_t i = 0; i < mesh.connectivity.size(); ++i)
+    if (mesh.connectivity[i] < 0 || mesh.connectivity[i] >= npoints)
+      throw bad(fmt::format("connectivity[{}] = {} is not a point id (there are {} points)", i,
+                            mesh.connectivity[i], npoints));
+  check_arrays(path, mesh.point_data, mesh.points.size(), "point");
+  check_arrays(path, mesh.cell_data, ncells, "cell");
+}
+
+// One array of the appended section: its XML description and its encoded bytes.
+struct Appended {
+  std::string xml_type, name;
+  int components = 1;
+  const char* raw = nullptr;  // the caller's values, raw_size bytes
+  std::uint64_t raw_size = 0;
+  std::vector<std::uint64_t> header;               // compressed: [n, block, last, sizes...]
+  std::vector<std::vector<unsigned char>> blocks;  // compressed blocks
+
+  std::uint64_t encoded_size(bool compress) const {
+    if (!compress) return sizeof(std::uint64_t) + raw_size;
+    std::uint64_t size = header.size() * sizeof(std::uint64_t);
+    for (const auto& b : blocks) size += b.size();
+    return size;
+  }
+};
+
+template <class T>
+Appended appended(std::string xml_type, std::string name, int components,
+                  const std::vector<T>& values) {
+  Appended a;
+  a.xml_type = std::move(xml_type);
+  a.name = std::move(name);
+  a.components = components;
+  a.raw = reinterpret_cast<const char*>(values.data());
+  a.raw_size = values.size() * sizeof(T);
+  return a;
+}
+
+Appended appended_data(const VtuArray& array) {
+  if (!array.i32.empty()) return appended("Int32", array.name, array.components, array.i32);
+  return appended("Float64", array.name, array.components, array.f64);
+}
+
+// Compresses every array into 1 MiB zlib blocks, all blocks in parallel.
+void compress_all(const std::string& path, std::vector<Appended>& arrays) {
+  struct Task {
+    Appended* array;
+    std::size_t block;
+  };
+  std::vector<Task> tasks;
+  for (Appended& a : arrays) {
+    const std::uint64_t nblocks = (a.raw_size + kBlockSize - 1) / kBlockSize;
+    a.header = {nblocks, kBlockSize, a.raw_size % kBlockSize};
+    a.header.resize(3 + nblocks, 0);
+    a.blocks.resize(nblocks);
+    for (std::size_t b = 0; b < nblocks; ++b) tasks.push_back({&a, b});
+  }
+  const auto ntasks = static_cast<std::int64_t>(tasks.size());
+  int failures = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : failures) if (ntasks > 1)
+  for (std::int64_t t = 0; t < ntasks; ++t) {
+    Appended& a = *tasks[t].array;
+    const std::size_t b = tasks[t].block;
+    const std::uint64_t begin = b * kBlockSize;
+    const std::uint64_t size = std::min(kBlockSize, a.raw_size - begin);
+    std::vector<unsigned char>& out = a.blocks[b];
+    try {  // no exception may leave an OpenMP region
+      out.resize(compressBound(static_cast<uLong>(size)));
+    } catch (...) {
+      ++failures;
+      continue;
+    }
+    uLongf out_size = static_cast<uLongf>(out.size());
+    if (compress2(out.data(), &out_size, reinterpret_cast<const Bytef*>(a.raw + begin),
+                  static_cast<uLong>(size), kZlibLevel) != Z_OK) {
+      ++failures;
+      continue;
+    }
+    out.resize(out_size);  // shrinking never throws
+    a.header[3 + b] = out_size;
+  }
+  if (failures > 0)
+    throw std::runtime_error(fmt::format("cannot write '{}': zlib compression failed", path));
+}
+
+std::string data_array_xml(const Appended& a, std::uint64_t offset, const char* indent) {
+  std::string xml =
+      fmt::format(R"({}<DataArray type="{}" Name="{}")", indent, a.xml_type, xml_escape(a.name));
+  if (a.components != 1) xml += fmt::format(R"( NumberOfComponents="{}")", a.components);
+  xml += fmt::format(R"( format="appended" offset="{}"/>)", offset);
+  xml += '\n';
+  return xml;
+}
+
+}  // namespace
+
+void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
+  check_mesh(path, mesh);
+
+  // The appended arrays in file order: point data, cell data, points, cells.
+  std::vector<Appended> arrays;
+  for (const VtuArray& a : mesh.point_data) arrays.push_back(appended_data(a));
+  for (const VtuArray& a : mesh.cell_data) arrays.push_back(appended_data(a));
+  Appended points;
+  points.xml_type = "Float64";
+  points.name = "Points";
+  points.components = 3;
+  points.raw = reinterpret_cast<const char*>(mesh.points.data());
+  points.raw_size = mesh.points.size() * sizeof(Vec3);
+  arrays.push_back(points);
+  arrays.push_back(appended("Int64", "connectivity", 1, mesh.connectivity));
+  arrays.push_back(appended("Int64", "offsets", 1, mesh.offsets));
+  arrays.push_back(appended("UInt8", "types", 1, mesh.types));
+  if (compress) compress_all(path, arrays);
+
+  std::vector<std::uint64_t> offsets(arrays.size());
+  std::uint64_t offset = 0;
+  for (std::size_t i = 0; i < arrays.size(); ++i) {
+    offsets[i] = offset;
+    offset += arrays[i].encoded_size(compress);
+  }
+
+  std::string xml = R"(<?xml version="1.0"?>)"
+                    "\n";
+  xml += R"(<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian")"
+         R"( header_type="UInt64")";
+  if (compress) xml += R"( compressor="vtkZLibDataCompressor")";
+  xml += ">\n  <UnstructuredGrid>\n";
+  xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.points.size(),
+                     mesh.types.size());
+  const std::size_t npd = mesh.point_data.size(), ncd = mesh.cell_data.size();
+  const char* ind = "        ";
+  xml += "      <PointData>\n";
+  for (std::size_t i = 0; i < npd; ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
+  xml += "      </PointData>\n      <CellData>\n";
+  for (std::size_t i = npd; i < npd + ncd; ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
+  xml += "      </CellData>\n      <Points>\n";
+  std::size_t i = npd + ncd;
+  xml += data_array_xml(arrays[i], offsets[i], ind);
+  xml += "      </Points>\n      <Cells>\n";
+  for (++i; i < arrays.size(); ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
+  xml += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
+  xml += "  <AppendedData encoding=\"raw\">\n   _";
+
+  AtomicFile file(path);
+  file.write(xml);
+  for (const Appended& a : arrays) {
+    if (compress) {
+      file.write(a.header.data(), a.header.size() * sizeof(std::uint64_t));
+      for (const auto& b : a.blocks) file.write(b.data(), b.size());
+    } else {
+      file.write(&a.raw_size, sizeof(std::uint64_t));
+      file.write(a.raw, a.raw_size);
+    }
+  }
+  file.write("\n  </AppendedData>\n</VTKFile>\n");
+  file.commit();
+}
+
+PvdWriter::PvdWriter(std::string pvd_path) : path_(std::move(pvd_path)) { rewrite(); }
+
+void PvdWriter::add(double time, const std::string& vtu_path) {
+  if (!std::isfinite(time))
+    throw std::invalid_argument(
+        fmt::format("PvdWriter('{}'): time {} of '{}' is not finite", path_, time, vtu_path));
+  if (vtu_path.empty() || has_control_char(vtu_path))
+    throw std::invalid_argument(fmt::format(
+        "PvdWriter('{}'): the file name must be non-empty and without control characters", path_));
+  steps_.emplace_back(time, vtu_path);
+  try {
+    rewrite();
+  } catch (...) {
+    steps_.pop_back();
+    throw;
+  }
+}
+
+void PvdWriter::rewrite() const {
+  std::string xml = R"(<?xml version="1.0"?>)"
+                    "\n";
+  xml += R"(<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">)"
+         "\n";
+  xml += "  <Collection>\n";
+  for (const auto& [time, file] : steps_)
+    xml += fmt::format(R"(    <DataSet timestep="{:.17g}" group="" part="0" file="{}"/>)"
+                       "\n",
+                       time, xml_escape(file));
+  xml += "  </Collection>\n</VTKFile>\n";
+  AtomicFile out(path_);
+  out.write(xml);
+  out.commit();
+}
+
+}  // namespace cdem

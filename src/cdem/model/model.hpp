@@ -1,0 +1,119 @@
+// The simulation state as flat arrays (structure of arrays), sized once at set-up.
+//
+// CDEM layout (SPEC 1): every block owns its nodes, stored contiguously
+// (nodes of block b are block_first_node[b] .. block_first_node[b+1]-1), so block kernels
+// write forces without conflicts. Blocks are sorted into groups of one element type and one
+// kind (elastic rock or explosive), so a kernel runs over a contiguous range with no branch on
+// the type. Every interface (a face or edge shared by two blocks) owns `springs_per_iface`
+// consecutive spring points (2 in 2D, 3 in 3D): spring s belongs to interface
+// s / springs_per_iface, and its node_a lies in block A, node_b in block B.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cdem/core/vec3.hpp"
+#include "cdem/mesh/mesh.hpp"
+#include "cdem/model/materials.hpp"
+
+namespace cdem {
+
+enum class BlockKind : std::uint8_t { Elastic = 0, Explosive = 1 };
+
+struct BlockGroup {
+  ElemType type;
+  BlockKind kind;
+  std::int32_t begin, end;  // block range
+};
+
+enum SpringState : std::uint8_t { kIntact = 0, kBroken = 1, kReleased = 2 };
+enum BreakMode : std::uint8_t { kModeNone = 0, kModeTension = 1, kModeShear = 2 };
+
+struct Model {
+  int dim = 0;
+  int springs_per_iface = 0;
+
+  // ---- nodes (one per block corner) ----
+  std::vector<Vec3> X;         // reference position (m)
+  std::vector<Vec3> x;         // current position (m)
+  std::vector<Vec3> v;         // velocity at the half step (m/s)
+  std::vector<Vec3> f;         // force accumulated in the current step (N)
+  std::vector<double> mass;    // lumped mass (kg)
+  std::vector<double> inv_mass;
+  std::vector<double> damping;        // mass-proportional damping coefficient (1/s)
+  std::vector<double> local_damping;  // alpha_L
+  std::vector<std::int32_t> node_block;
+  std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
+
+  // ---- blocks ----
+  std::vector<BlockGroup> groups;
+  std::vector<ElemType> block_type;
+  std::vector<std::int32_t> block_first_node;  // size n_blocks + 1
+  std::vector<std::int32_t> block_region;
+  std::vector<std::int32_t> block_material;    // index into block_materials
+  std::vector<std::int64_t> block_elem_tag;    // element number in the mesh file
+  std::vector<double> block_volume0;           // reference volume (2D: area x 1 m)
+  std::vector<double> block_size;              // characteristic size L_c (m), see topology.cpp
+  std::vector<double> block_altitude0;         // smallest altitude h_e (m), for the time step
+  // Reference shape-function gradients, per block at geom_offset[b]:
+  //   tri: 4 doubles, the 2x2 inverse of Dm = [X1-X0, X2-X0] (row-major)
+  //   quad: 4 Gauss points x (weight*detJ, 4 nodes x dN/dX, dN/dY) = 4 x 9 doubles
+  //   tet: 9 doubles, the 3x3 inverse of Dm = [X1-X0, X2-X0, X3-X0] (row-major)
+  std::vector<double> geom;
+  std::vector<std::int64_t> geom_offset;       // size n_blocks + 1
+  std::vector<Sym6> stress;                    // Cauchy stress (Pa), for output and monitors
+  std::vector<Sym6> stress0;                   // initial (in-situ) stress in the block frame
+  std::vector<double> strain_energy;           // J, current
+  std::vector<double> vol_ratio;               // J = V / V0
+
+  // ---- interfaces and spring points ----
+  std::vector<std::int32_t> iface_block_a, iface_block_b;
+  std::vector<std::int32_t> iface_material;    // index into spring_laws / iface_materials
+  std::vector<double> iface_area0;             // reference face area (m^2; 2D: length x 1 m)
+  std::vector<std::int32_t> sp_a, sp_b;        // nodes
+  std::vector<double> sp_area;                 // contact area A_c (m^2)
+  std::vector<double> sp_kn, sp_ks;            // stiffness x A_c (N/m)
+  std::vector<double> sp_fn;                   // normal force (N), tension positive
+  std::vector<Vec3> sp_fs;                     // shear force (N), in the tangent plane
+  std::vector<double> sp_w;                    // irreversible opening (m), fracture-energy law
+  std::vector<double> sp_slip;                 // accumulated plastic slip (m)
+  std::vector<double> sp_dil;                  // dilation opening (m)
+  std::vector<std::uint8_t> sp_state;          // SpringState
+  std::vector<std::uint8_t> sp_mode;           // BreakMode
+  std::vector<float> sp_break_time;            // s (-1 intact)
+  std::vector<double> sp_dissipated;           // J, fracture + friction + plastic work
+  std::vector<Vec3> sp_force;                  // force on node a (node b gets minus this)
+  std::vector<std::int32_t> node_sp_offset;    // CSR node -> spring points, size n_nodes + 1
+  std::vector<std::int32_t> node_sp_list;      // s + 1 when node is a, -(s + 1) when b
+
+  // ---- materials ----
+  std::vector<BlockMaterial> block_materials;
+  std::vector<InterfaceMaterial> iface_materials;
+  std::vector<SpringLaw> spring_laws;          // parallel to iface_materials
+  double release_distance_factor = 0.5;        // broken pair released beyond this x block size
+
+  // ---- regions and boundary facets (from the mesh) ----
+  std::vector<std::string> region_names;
+  struct BoundaryFacet {
+    std::array<std::int32_t, 3> nodes{-1, -1, -1};  // block nodes, outward order
+    std::int32_t block = -1;
+    int count() const { return nodes[2] < 0 ? 2 : 3; }
+  };
+  struct FacetSet {
+    std::string name;
+    std::vector<BoundaryFacet> facets;
+  };
+  std::vector<FacetSet> facet_sets;
+
+  std::size_t n_nodes() const { return x.size(); }
+  std::size_t n_blocks() const { return block_type.size(); }
+  std::size_t n_ifaces() const { return iface_block_a.size(); }
+  std::size_t n_springs() const { return sp_a.size(); }
+  const FacetSet* facet_set(const std::string& name) const {
+    for (const auto& s : facet_sets)
+      if (s.name == name) return &s;
+    return nullptr;
+  }
+};
+
+}  // namespace cdem

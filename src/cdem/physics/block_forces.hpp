@@ -1,0 +1,25 @@
+// Co-rotational linear-elastic block kernels (SPEC 1.2, eq. 6): for each block,
+// F = sum_i x_i (x) grad_X N_i, polar split F = R U, eps = U - I,
+// S = lambda tr(eps) I + 2 G eps (+ initial stress), nodal force f_i = -V0 R S grad_X N_i,
+// Cauchy stress (output) sigma = R S R^T. A rigid rotation gives U = I: no stress.
+// Each kernel ASSIGNS the block's nodal forces (it runs first in the step) and stores the
+// block's stress, strain energy and volume ratio J. It returns the number of inverted blocks
+// (J <= 0) in the range; the first one is written to *first_inverted.
+#pragma once
+#include <cstdint>
+
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
+                              std::int32_t* first_inverted);
+std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
+                               std::int32_t* first_inverted);
+std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
+                              std::int32_t* first_inverted);
+
+// All elastic groups; explosive groups are zeroed here and loaded by the explosive kernels.
+std::int64_t block_forces(Model& m, std::int32_t* first_inverted);
+
+}  // namespace cdem

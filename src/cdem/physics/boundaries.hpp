@@ -1,0 +1,53 @@
+// Boundary conditions (SPEC 1.4) prepared once from the case: velocity constraints (fixed,
+// roller, prescribed velocity) applied after the velocity update, and boundary forces
+// (pressure, Lysmer-Kuhlemeyer viscous dashpots) added before it. Gravity is applied in the
+// integration kernel. Boundary node sets are small (surface), so these loops are serial.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "cdem/io/case.hpp"
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+struct Boundaries {
+  struct Constraint {
+    std::int32_t node;
+    std::uint8_t kind;  // 0 fixed, 1 roller (normal), 2 prescribed velocity
+    Vec3 dir;           // roller: unit normal; velocity: velocity vector (m/s)
+    std::int32_t table; // velocity: index into tables
+    std::int32_t slot;  // index into work_nodes
+  };
+  struct LoadFacet {
+    Model::BoundaryFacet facet;
+    std::uint8_t kind;   // 0 pressure, 1 dashpot
+    double a, b;         // pressure: value (Pa); dashpot: rho c_p, rho c_s (Pa s/m)
+    std::int32_t table;
+    std::array<std::int32_t, 3> slot;  // index of each facet node in work_nodes
+  };
+  std::vector<Constraint> constraints;
+  std::vector<LoadFacet> loads;
+  std::vector<TimeTable> tables;
+  Vec3 gravity{};
+  // Energy book-keeping on the (few) boundary nodes: v(n-1/2), load and dashpot forces of the
+  // step, so that their work uses the mid-step velocity (v_old + v_new) / 2.
+  std::vector<std::int32_t> work_nodes;
+  std::vector<Vec3> v_old, f_load, f_dash;
+};
+
+// Throws InputError naming the case file and key for an unknown face set.
+Boundaries prepare_boundaries(const Model& m, const Case& c);
+
+// Adds the pressure and dashpot forces at time t to m.f (and saves v(n-1/2) of boundary nodes).
+void boundary_forces(Model& m, Boundaries& b, double t);
+
+// Velocity constraints on v(n+1/2), prescribed values taken at t (= t_n + dt/2). Returns the
+// work of the constraint reactions over the step, R . v_mid dt with R = m (v_c - v_free) / dt.
+double apply_constraints(Model& m, Boundaries& b, double t, double dt);
+
+// Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0).
+double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed);
+
+}  // namespace cdem

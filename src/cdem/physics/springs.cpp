@@ -1,0 +1,177 @@
+#include "cdem/physics/springs.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cdem/mesh/element_geometry.hpp"
+
+namespace cdem {
+namespace {
+
+inline double elastic_energy(const SpringPoint& sp) {
+  return 0.5 * sp.fn * sp.fn / sp.kn + 0.5 * dot(sp.fs, sp.fs) / sp.ks;
+}
+
+inline void cap_shear(Vec3& fs, double cap) {
+  const double m = norm(fs);
+  if (m > cap) fs *= (cap > 0 ? cap / m : 0.0);
+}
+
+void break_spring(SpringPoint& sp, std::uint8_t mode, double t) {
+  sp.state = kBroken;
+  sp.mode = mode;
+  sp.break_time = static_cast<float>(t);
+}
+
+// Broken: compression only (faces in contact when d_n < 0) and Coulomb friction.
+inline void broken_law(SpringPoint& sp, const SpringLaw& law, double dn) {
+  sp.fn = std::min(0.0, sp.kn * dn);
+  cap_shear(sp.fs, -sp.fn * law.tan_phi_r);
+}
+
+void mohr_coulomb(SpringPoint& sp, const SpringLaw& law, double dn, double t) {
+  sp.fn = sp.kn * dn;
+  if (sp.fn >= law.ft * sp.area) {
+    break_spring(sp, kModeTension, t);
+  } else if (norm(sp.fs) >= law.c * sp.area - sp.fn * law.tan_phi) {
+    break_spring(sp, kModeShear, t);
+  }
+  if (sp.state == kBroken) broken_law(sp, law, dn);
+}
+
+void fracture_energy(SpringPoint& sp, const SpringLaw& law, double dn, double t) {
+  const double ftA = law.ft * sp.area, cA = law.c * sp.area;
+  auto dt_of = [&](double w) { return law.wc > 0 ? w / law.wc : (w > 0 ? 1.0 : 0.0); };
+  auto ds_of = [&](double s) { return law.sc > 0 ? s / law.sc : (s > 0 ? 1.0 : 0.0); };
+  const double open = dn - sp.dil;
+  // ---- tension: f_t(w) = f_t0 (1 - D) with D = max(w / w_c, s / s_c) ----
+  double dmg_s = ds_of(sp.slip);
+  double fn = sp.kn * (open - sp.w);
+  const double ft_now = ftA * (1.0 - std::max(dt_of(sp.w), dmg_s));
+  if (fn > ft_now) {
+    double w_new;
+    const double soft = sp.kn - (law.wc > 0 ? ftA / law.wc : 0.0);  // > 0 unless snap-back
+    const double w_soft = soft > 0 ? (sp.kn * open - ftA) / soft : law.wc;
+    if (dt_of(w_soft) >= dmg_s)
+      w_new = w_soft;  // on the softening line
+    else
+      w_new = open - ftA * (1.0 - dmg_s) / sp.kn;  // strength already lowered by shear
+    sp.w = std::max(sp.w, std::min(w_new, std::max(law.wc, 0.0)));
+    fn = sp.kn * (open - sp.w);
+    if (dt_of(sp.w) >= 1.0) fn = std::min(fn, 0.0);
+  }
+  sp.fn = fn;
+  // ---- shear: c(s) = c0 (1 - D), strength c A - F_n tan(phi) ----
+  double dmg = std::max(dt_of(sp.w), ds_of(sp.slip));
+  double tau = std::max(0.0, cA * (1.0 - dmg) - sp.fn * law.tan_phi);
+  const double fs_mag = norm(sp.fs);
+  if (fs_mag > tau && dmg < 1.0) {
+    const double excess = fs_mag - tau;
+    const bool shear_governs = ds_of(sp.slip) >= dt_of(sp.w);
+    const double soft = sp.ks - (shear_governs && law.sc > 0 ? cA / law.sc : 0.0);
+    double ds = soft > 0 ? excess / soft : law.sc;
+    ds = std::min(ds, std::max(law.sc - sp.slip, 0.0) + excess / sp.ks);
+    sp.slip += ds;
+    sp.dil += ds * law.tan_psi;
+    dmg = std::max(dt_of(sp.w), ds_of(sp.slip));
+    tau = std::max(0.0, cA * (1.0 - std::min(dmg, 1.0)) - sp.fn * law.tan_phi);
+    cap_shear(sp.fs, tau);
+  }
+  if (dmg >= 1.0) {
+    break_spring(sp, dt_of(sp.w) >= ds_of(sp.slip) ? kModeTension : kModeShear, t);
+    broken_law(sp, law, dn);
+  }
+}
+
+}  // namespace
+
+Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
+                         double release_distance, Vec3 force_old) {
+  if (sp.state == kReleased) return {};
+  const double e_old = elastic_energy(sp);
+  // Keep the shear force in the current tangent plane, preserving its magnitude.
+  const double fs_old = norm(sp.fs);
+  sp.fs -= dot(sp.fs, n) * n;
+  const double fs_proj = norm(sp.fs);
+  if (fs_proj > 0) sp.fs *= fs_old / fs_proj;
+  const double du_n = dot(du, n);
+  sp.fs += sp.ks * (du - du_n * n);
+  const double dn = dot(d, n);
+  if (sp.state == kBroken) {
+    if (norm(d) > release_distance) {
+      sp.state = kReleased;
+      sp.fn = 0;
+      sp.fs = {};
+    } else {
+      broken_law(sp, law, dn);
+    }
+  } else {
+    switch (law.law) {
+      case InterfaceLaw::Elastic: sp.fn = sp.kn * dn; break;
+      case InterfaceLaw::MohrCoulomb: mohr_coulomb(sp, law, dn, t); break;
+      case InterfaceLaw::FractureEnergy: fracture_energy(sp, law, dn, t); break;
+    }
+  }
+  const Vec3 force = sp.fn * n + sp.fs;
+  sp.dissipated += 0.5 * dot(force_old + force, du) - (elastic_energy(sp) - e_old);
+  return force;
+}
+
+void spring_forces(Model& m, double dt, double t) {
+  const int np = m.springs_per_iface;
+  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < ni; ++i) {
+    const std::int64_t s0 = i * np;
+    Vec3 pa[3], pb[3];
+    for (int q = 0; q < np; ++q) {
+      pa[q] = m.x[m.sp_a[s0 + q]];
+      pb[q] = m.x[m.sp_b[s0 + q]];
+    }
+    const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(pa, np), np) +
+                              face_area_vector(std::span<const Vec3>(pb, np), np));
+    const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+    const double release =
+        m.release_distance_factor * 0.5 * (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+    for (int q = 0; q < np; ++q) {
+      const std::int64_t s = s0 + q;
+      if (m.sp_state[s] == kReleased) {
+        m.sp_force[s] = {};
+        continue;
+      }
+      const auto a = m.sp_a[s], b = m.sp_b[s];
+      SpringPoint sp{m.sp_kn[s],   m.sp_ks[s],   m.sp_area[s],  m.sp_fn[s],
+                     m.sp_fs[s],   m.sp_w[s],    m.sp_slip[s],  m.sp_dil[s],
+                     m.sp_state[s], m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s]};
+      m.sp_force[s] = update_spring_point(sp, law, pb[q] - pa[q], dt * (m.v[b] - m.v[a]), n, t,
+                                          release, m.sp_force[s]);
+      m.sp_fn[s] = sp.fn;
+      m.sp_fs[s] = sp.fs;
+      m.sp_w[s] = sp.w;
+      m.sp_slip[s] = sp.slip;
+      m.sp_dil[s] = sp.dil;
+      m.sp_state[s] = sp.state;
+      m.sp_mode[s] = sp.mode;
+      m.sp_break_time[s] = sp.break_time;
+      m.sp_dissipated[s] = sp.dissipated;
+    }
+  }
+}
+
+void gather_spring_forces(Model& m) {
+  const auto nn = static_cast<std::int64_t>(m.n_nodes());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t n = 0; n < nn; ++n) {
+    Vec3 acc{};
+    for (auto k = m.node_sp_offset[n]; k < m.node_sp_offset[n + 1]; ++k) {
+      const auto e = m.node_sp_list[k];
+      if (e > 0)
+        acc += m.sp_force[e - 1];
+      else
+        acc -= m.sp_force[-e - 1];
+    }
+    m.f[n] += acc;
+  }
+}
+
+}  // namespace cdem

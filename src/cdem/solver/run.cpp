@@ -1,0 +1,218 @@
+#include "cdem/solver/run.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+#include "cdem/analysis/damage.hpp"
+#include "cdem/analysis/monitors.hpp"
+#include "cdem/core/error.hpp"
+#include "cdem/io/run_writer.hpp"
+#include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/mesh/topology.hpp"
+#include "cdem/solver/simulation.hpp"
+
+namespace cdem {
+
+Mesh load_mesh(const Case& c) {
+  if (!c.mesh_file.empty()) return read_gmsh(c.mesh_file);
+  return generate_mesh(*c.generate);
+}
+
+Model build_case_model(const Case& c, const Mesh& mesh) {
+  return build_model(mesh, c.materials, c.interfaces, c.path);
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string describe_node(const Model& m, std::size_t n) {
+  const auto b = m.node_block[n];
+  const Vec3 p = m.X[n];
+  return fmt::format("block {} (element {} of region '{}') at ({:.4g}, {:.4g}, {:.4g})", b,
+                     m.block_elem_tag[b], m.region_names[m.block_region[b]], p.x, p.y, p.z);
+}
+
+// Returns a diagnosis when the state is not finite or the energy has blown up, else "".
+std::string check_stability(const Simulation& sim, const EnergyBalance& e, double factor,
+                            double t) {
+  const Model& m = sim.model();
+  if (sim.inverted_blocks() > 0) {
+    const auto b = sim.first_inverted();
+    return fmt::format("at t = {:.6g} s (step {}): {} block(s) inverted (volume ratio <= 0), the "
+                       "first: block {} (element {} of region '{}'). The time step may be too large "
+                       "or a load too strong for the mesh.",
+                       t, sim.steps(), sim.inverted_blocks(), b, m.block_elem_tag[b],
+                       m.region_names[m.block_region[b]]);
+  }
+  if (!std::isfinite(e.kinetic) || !std::isfinite(e.block_strain) || !std::isfinite(e.spring_strain)) {
+    std::size_t worst = 0;
+    for (std::size_t n = 0; n < m.n_nodes(); ++n)
+      if (!std::isfinite(m.v[n].x + m.v[n].y + m.v[n].z)) {
+        worst = n;
+        break;
+      }
+    return fmt::format("at t = {:.6g} s (step {}): the state is not finite (NaN or Inf), first at "
+                       "node {} of {}",
+                       t, sim.steps(), worst, describe_node(m, worst));
+  }
+  const double input = std::abs(e.initial) + std::abs(e.external_work) + std::abs(e.gravity_work) +
+                       std::abs(e.explosive_work);
+  if (e.mechanical() > factor * input && e.mechanical() > 1e-9) {
+    std::size_t worst = 0;
+    double vmax = -1;
+    for (std::size_t n = 0; n < m.n_nodes(); ++n)
+      if (norm(m.v[n]) > vmax) vmax = norm(m.v[n]), worst = n;
+    return fmt::format("at t = {:.6g} s (step {}): energy blow-up: mechanical energy {:.4g} J is "
+                       "more than {} x the energy put in ({:.4g} J). Fastest node {} ({:.4g} m/s) "
+                       "in {}",
+                       t, sim.steps(), e.mechanical(), factor, input, worst, vmax,
+                       describe_node(m, worst));
+  }
+  return {};
+}
+
+}  // namespace
+
+RunResult run_case(const Case& c, const RunOptions& opt) {
+  const auto wall0 = Clock::now();
+  const int threads = opt.threads > 0 ? opt.threads : (c.threads > 0 ? c.threads : omp_get_num_procs());
+  omp_set_num_threads(threads);
+
+  Mesh mesh = load_mesh(c);
+  Simulation sim(build_case_model(c, mesh), c);
+  const Model& m = sim.model();
+  const auto monitors = locate_monitors(m, c);
+  const auto st = sim.stable();
+  if (!opt.quiet)
+    spdlog::info("{}: {} blocks, {} nodes, {} spring points; dt = {:.4g} s limited by the {} "
+                 "(blocks {:.4g} s, springs {:.4g} s, safety {}); {} threads",
+                 c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), sim.dt(), st.limit, st.dt_block,
+                 st.dt_spring, c.dt_safety, threads);
+
+  RunWriter out(opt.out_dir, c);
+  // Field output times: t = 0, every output_interval, the listed times, the end.
+  std::vector<double> field_times = c.output_times;
+  if (c.output_interval > 0)
+    for (double t = 0; t < c.end_time * (1 - 1e-12); t += c.output_interval) field_times.push_back(t);
+  field_times.push_back(0.0);
+  field_times.push_back(c.end_time);
+  std::sort(field_times.begin(), field_times.end());
+  field_times.erase(std::unique(field_times.begin(), field_times.end(),
+                                [](double a, double b) { return std::abs(a - b) < 1e-15; }),
+                    field_times.end());
+
+  const double dt = sim.dt();
+  const std::int64_t total_steps =
+      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(c.end_time / dt - 1e-9)));
+  const std::int64_t steps_limit = c.max_steps > 0 ? std::min(c.max_steps, total_steps) : total_steps;
+  std::size_t next_field = 0;
+  double next_hist = 0;
+  RunResult res;
+  std::vector<std::pair<std::string, double>> peak_vm(c.monitors.size(), {"", 0.0});
+  std::vector<double> peak_vm_time(c.monitors.size(), 0.0);
+  EnergyBalance last{};
+  const bool tty = isatty(2) && !opt.quiet;
+  auto last_print = Clock::now();
+  const auto loop0 = Clock::now();
+
+  for (std::int64_t k = 0; k < steps_limit; ++k) {
+    const double t_state = sim.time();  // the state after this step is at t_n = this time
+    const bool hist = t_state >= next_hist - 0.5 * dt || k + 1 == steps_limit;
+    sim.step(hist);
+    const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
+    if (hist) {
+      while (next_hist <= t_state + 0.5 * dt) next_hist += c.history_interval > 0 ? c.history_interval : dt;
+      last = sim.energy();
+      out.write_history(m, t_state, last, monitors);
+      for (std::size_t q = 0; q < monitors.size(); ++q) {
+        const double vm = von_mises(m.stress[monitors[q]]);
+        if (vm > peak_vm[q].second) peak_vm[q].second = vm, peak_vm_time[q] = t_state;
+      }
+      res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state);
+      if (!res.diagnosis.empty()) {
+        out.write_fields(m, t_state);
+        out.flush();
+        res.status = 3;
+        spdlog::error("run stopped: {}", res.diagnosis);
+        spdlog::error("the output written so far is in {}", opt.out_dir);
+        break;
+      }
+    }
+    if (field || k + 1 == steps_limit) {
+      while (next_field < field_times.size() && field_times[next_field] <= t_state + 0.5 * dt) ++next_field;
+      out.write_fields(m, t_state);
+      out.flush();
+    }
+    if (!opt.quiet) {
+      const auto now = Clock::now();
+      const double since = std::chrono::duration<double>(now - last_print).count();
+      if ((tty && since > 0.5) || (!tty && since > 10.0)) {
+        last_print = now;
+        const double el = std::chrono::duration<double>(now - loop0).count();
+        const double rate = (k + 1) / std::max(el, 1e-9);
+        const double eta = (steps_limit - k - 1) / rate;
+        const std::string line = fmt::format("t = {:.4e} s  step {}/{}  {:.0f} steps/s  ETA {:.0f} s",
+                                             t_state, k + 1, steps_limit, rate, eta);
+        if (tty)
+          fmt::print(stderr, "\r{}   ", line);
+        else
+          spdlog::info("{}", line);
+      }
+    }
+  }
+  if (tty) fmt::print(stderr, "\n");
+  res.steps = sim.steps();
+  res.wall_time_s = std::chrono::duration<double>(Clock::now() - wall0).count();
+  const double loop_s = std::chrono::duration<double>(Clock::now() - loop0).count();
+  const FractureDegree fd = fracture_degree(m);
+  std::vector<std::pair<std::string, std::string>> kv = {
+      {"title", json_string(c.title)},
+      {"status", json_string(res.status == 0 ? "finished" : "unstable")},
+      {"diagnosis", json_string(res.diagnosis)},
+      {"end_time", json_number(sim.time())},
+      {"wall_time_s", json_number(res.wall_time_s)},
+      {"loop_time_s", json_number(loop_s)},
+      {"threads", std::to_string(threads)},
+      {"steps", std::to_string(res.steps)},
+      {"dt", json_number(dt)},
+      {"dt_limit", json_string(st.limit)},
+      {"dt_blocks", json_number(st.dt_block)},
+      {"dt_springs", json_number(st.dt_spring)},
+      {"blocks", std::to_string(m.n_blocks())},
+      {"nodes", std::to_string(m.n_nodes())},
+      {"spring_points", std::to_string(m.n_springs())},
+      {"block_steps_per_s", json_number(m.n_blocks() * static_cast<double>(res.steps) / loop_s)},
+      {"spring_steps_per_s", json_number(m.n_springs() * static_cast<double>(res.steps) / loop_s)},
+      {"fracture_degree", json_number(fd.area)},
+      {"fracture_degree_tensile", json_number(fd.tensile)},
+      {"fracture_degree_shear", json_number(fd.shear)},
+      {"fracture_degree_count", json_number(fd.count)},
+      {"energy_error", json_number(last.error)},
+      {"kinetic_energy", json_number(last.kinetic)},
+      {"explosive_work", json_number(last.explosive_work)},
+      {"field_outputs", std::to_string(out.field_outputs())},
+  };
+  std::string peaks = "{";
+  for (std::size_t q = 0; q < monitors.size(); ++q)
+    peaks += fmt::format("{}{}: {{\"peak_von_mises\": {}, \"time\": {}}}", q ? ", " : "",
+                         json_string(c.monitors[q].name), json_number(peak_vm[q].second),
+                         json_number(peak_vm_time[q]));
+  kv.emplace_back("monitors", peaks + "}");
+  write_json((std::filesystem::path(opt.out_dir) / "summary.json").string(), kv);
+  if (!opt.quiet && res.status == 0)
+    spdlog::info("finished: {} steps in {:.2f} s ({:.3g} block-steps/s), fracture degree {:.4f}, "
+                 "energy error {:.2e}; results in {}",
+                 res.steps, res.wall_time_s, m.n_blocks() * static_cast<double>(res.steps) / loop_s,
+                 fd.area, last.error, opt.out_dir);
+  return res;
+}
+
+}  // namespace cdem

@@ -1,0 +1,187 @@
+#include "cdem/solver/simulation.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "cdem/core/error.hpp"
+#include "cdem/physics/block_forces.hpp"
+#include "cdem/physics/integrate.hpp"
+#include "cdem/physics/springs.hpp"
+
+namespace cdem {
+
+Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
+  m_.release_distance_factor = c.release_distance_factor;
+  bc_ = prepare_boundaries(m_, c);
+  setup_damping_zones(c);
+  setup_initial_stress(c);
+  stable_ = stable_time_step(m_, c.dt_safety);
+  dt_ = stable_.dt;
+  if (c.fixed_dt > 0) {
+    if (c.fixed_dt > stable_.dt / c.dt_safety)
+      throw InputError(fmt::format("{}: key 'simulation.dt': {} s is above the stable step {:.4g} s "
+                                   "(limited by the {})",
+                                   c.path, c.fixed_dt, stable_.dt / c.dt_safety, stable_.limit));
+    dt_ = c.fixed_dt;
+  }
+  if (!(dt_ > 0) || !std::isfinite(dt_))
+    throw InputError(fmt::format("{}: no finite stable time step (a model without blocks?)", c.path));
+  node_dissipated_.assign(m_.n_nodes(), 0.0);
+  ke_.assign(m_.n_nodes(), 0.0);
+  // Forces at t = 0 (block stresses for output before the first step).
+  block_forces(m_, nullptr);
+  e_initial_ = energy().mechanical();
+}
+
+void Simulation::setup_damping_zones(const Case& c) {
+  for (const auto& z : c.damping_zones) {
+    int region = -1;
+    for (std::size_t r = 0; r < m_.region_names.size(); ++r)
+      if (m_.region_names[r] == z.region) region = static_cast<int>(r);
+    if (region < 0)
+      throw InputError(fmt::format("{}: damping_zone: region '{}' is not in the mesh", c.path, z.region));
+    // Inner edge: vertices the zone shares with blocks outside it.
+    std::vector<char> in_zone(m_.n_blocks(), 0), out_vertex, in_vertex;
+    std::int32_t nv = 0;
+    for (auto v : m_.node_vertex) nv = std::max(nv, v + 1);
+    out_vertex.assign(nv, 0);
+    in_vertex.assign(nv, 0);
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+      in_zone[b] = m_.block_region[b] == region;
+      for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n)
+        (in_zone[b] ? in_vertex : out_vertex)[m_.node_vertex[n]] = 1;
+    }
+    std::vector<Vec3> edge;
+    std::vector<char> seen(nv, 0);
+    for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
+      const auto v = m_.node_vertex[n];
+      if (in_vertex[v] && out_vertex[v] && !seen[v]) {
+        seen[v] = 1;
+        edge.push_back(m_.X[n]);
+      }
+    }
+    std::vector<double> dist(m_.n_blocks(), 0.0);
+    double dmax = 0;
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+      if (!in_zone[b]) continue;
+      Vec3 cen{};
+      const auto n0 = m_.block_first_node[b], n1 = m_.block_first_node[b + 1];
+      for (auto n = n0; n < n1; ++n) cen += m_.X[n];
+      cen = cen / (n1 - n0);
+      double d = edge.empty() ? 0.0 : std::numeric_limits<double>::infinity();
+      for (const auto& p : edge) d = std::min(d, norm(cen - p));
+      dist[b] = d;
+      dmax = std::max(dmax, d);
+    }
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+      if (!in_zone[b]) continue;
+      // Graded from zero at the inner edge to max_damping at the outer edge.
+      const double mu = dmax > 0 ? z.max_damping * std::pow(dist[b] / dmax, z.exponent) : z.max_damping;
+      for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n) m_.damping[n] += mu;
+    }
+  }
+}
+
+void Simulation::setup_initial_stress(const Case& c) {
+  if (!c.initial_stress.enabled) return;
+  const auto& is = c.initial_stress;
+  auto stress_at = [&](Vec3 p) {
+    const double depth = is.reference_level - (m_.dim == 3 ? p.z : p.y);
+    Sym6 s;
+    for (int k = 0; k < 6; ++k) s[k] = is.at_reference[k] + is.gradient[k] * depth;
+    return s;
+  };
+  std::vector<Vec3> centroid(m_.n_blocks());
+  for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+    Vec3 cen{};
+    const auto n0 = m_.block_first_node[b], n1 = m_.block_first_node[b + 1];
+    for (auto n = n0; n < n1; ++n) cen += m_.X[n];
+    centroid[b] = cen / (n1 - n0);
+    m_.stress0[b] = stress_at(centroid[b]);
+    m_.stress[b] = m_.stress0[b];
+  }
+  // Pre-load the springs with the traction of the mean stress of their two blocks.
+  const int np = m_.springs_per_iface;
+  for (std::size_t i = 0; i < m_.n_ifaces(); ++i) {
+    const Sym6 sa = m_.stress0[m_.iface_block_a[i]], sb = m_.stress0[m_.iface_block_b[i]];
+    Sym6 s;
+    for (int k = 0; k < 6; ++k) s[k] = 0.5 * (sa[k] + sb[k]);
+    Vec3 pa[3];
+    for (int q = 0; q < np; ++q) pa[q] = m_.X[m_.sp_a[i * np + q]];
+    Vec3 n{};
+    if (np == 2) {
+      const Vec3 t = pa[1] - pa[0];
+      n = normalized(Vec3{t.y, -t.x, 0});
+    } else {
+      n = normalized(cross(pa[1] - pa[0], pa[2] - pa[0]));
+    }
+    const Vec3 tr{s[0] * n.x + s[3] * n.y + s[5] * n.z, s[3] * n.x + s[1] * n.y + s[4] * n.z,
+                  s[5] * n.x + s[4] * n.y + s[2] * n.z};
+    const double sn = dot(tr, n);
+    for (int q = 0; q < np; ++q) {
+      const auto sp = i * np + q;
+      m_.sp_fn[sp] = sn * m_.sp_area[sp];
+      m_.sp_fs[sp] = m_.sp_area[sp] * (tr - sn * n);
+      m_.sp_force[sp] = m_.sp_fn[sp] * n + m_.sp_fs[sp];
+    }
+  }
+}
+
+void Simulation::step(bool sample) {
+  // 1. positions x(n) = x(n-1) + dt v(n-1/2)
+  update_positions(m_, dt_);
+  // 2. block forces (assigns f)
+  std::int32_t first = -1;
+  const auto inv = block_forces(m_, &first);
+  if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
+  inverted_ = inv;
+  // 3. spring forces and their gather
+  spring_forces(m_, dt_, t_);
+  gather_spring_forces(m_);
+  // 4. (general contact: not yet) 5. explosive and other loads
+  for (auto& h : loads_) w_explosive_ += h(m_, t_, dt_) * dt_;
+  // 6. boundary loads (pressure, dashpots)
+  boundary_forces(m_, bc_, t_);
+  // 7. integration with gravity and damping
+  integrate(m_, bc_.gravity, dt_, node_dissipated_, sample ? ke_.data() : nullptr);
+  // 8. velocity constraints (prescribed at the mid-step time)
+  w_boundary_ += apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_);
+  double absorbed = 0;
+  w_boundary_ += load_work(m_, bc_, dt_, &absorbed);
+  w_absorbed_ += absorbed;
+  t_ += dt_;
+  ++steps_;
+}
+
+EnergyBalance Simulation::energy() const {
+  EnergyBalance e;
+  for (double k : ke_) e.kinetic += k;
+  for (double s : m_.strain_energy) e.block_strain += s;
+  for (std::size_t s = 0; s < m_.n_springs(); ++s) {
+    if (m_.sp_state[s] == kReleased) continue;
+    e.spring_strain += 0.5 * m_.sp_fn[s] * m_.sp_fn[s] / m_.sp_kn[s] +
+                       0.5 * dot(m_.sp_fs[s], m_.sp_fs[s]) / m_.sp_ks[s];
+    e.fracture += m_.sp_dissipated[s];
+  }
+  for (std::size_t s = 0; s < m_.n_springs(); ++s)
+    if (m_.sp_state[s] == kReleased) e.fracture += m_.sp_dissipated[s];
+  for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
+    e.damping += node_dissipated_[n];
+    e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X[n]);
+  }
+  e.damping += w_absorbed_;
+  e.external_work = w_boundary_;
+  e.explosive_work = w_explosive_;
+  e.initial = e_initial_;
+  const double stored = e.mechanical() + e.damping + e.fracture;
+  const double input = e.initial + e.external_work + e.gravity_work + e.explosive_work;
+  e.balance = stored - input;
+  const double scale = std::max({std::abs(input), e.mechanical(), 1e-300});
+  e.error = std::abs(e.balance) / scale;
+  return e;
+}
+
+}  // namespace cdem

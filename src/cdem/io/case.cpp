@@ -9,6 +9,7 @@
 
 #include "cdem/core/error.hpp"
 #include "cdem/io/toml_reader.hpp"
+#include "cdem/explosive/explosive_library.hpp"
 
 namespace cdem {
 
@@ -139,6 +140,106 @@ GenerateSpec parse_generate(const TomlTable& g) {
   return s;
 }
 
+std::string builtin_list() {
+  std::string s;
+  for (const auto& n : builtin_explosive_names()) s += (s.empty() ? "'" : ", '") + n + "'";
+  return s;
+}
+
+void parse_explosives_and_holes(const TomlTable& top, Case& c) {
+  for (const auto& t : top.array_of_tables("explosive")) {
+    t.check_known({"name", "eos", "density", "detonation_velocity", "detonation_heat", "gamma1",
+                   "gamma2", "A", "B", "R1", "R2", "omega", "E0"});
+    ExplosiveDef e;
+    e.name = t.string("name");
+    const std::string where = fmt::format("{}: explosive '{}'", t.file(), e.name);
+    const std::string kind = t.choice("eos", {"landau", "jwl"}, "landau");
+    if (kind == "landau")
+      e.eos = LandauEos::make(t.positive("density"), t.positive("detonation_velocity"),
+                              t.positive("detonation_heat"), t.number("gamma1", 3.0),
+                              t.number("gamma2", 4.0 / 3.0), where);
+    else
+      e.eos = JwlEos::make(t.positive("density"), t.positive("detonation_velocity"), t.positive("A"),
+                           t.positive("B"), t.positive("R1"), t.positive("R2"), t.positive("omega"),
+                           t.positive("E0"), where);
+    if (c.explosive(e.name))
+      throw InputError(fmt::format("{}: duplicate explosive name '{}'", t.where("name"), e.name));
+    c.explosives.push_back(e);
+  }
+  auto resolve = [&](const std::string& name, const std::string& where) {
+    if (c.explosive(name)) return;
+    const auto b = builtin_explosive(name);
+    if (!b)
+      throw InputError(fmt::format("{}: unknown explosive '{}' (built-in: {}; or define it in "
+                                   "[[explosive]])",
+                                   where, name, builtin_list()));
+    c.explosives.push_back({name, *b});
+  };
+  for (const auto& m : c.materials)
+    if (!m.explosive.empty() && !c.explosive(m.explosive) && builtin_explosive(m.explosive))
+      c.explosives.push_back({m.explosive, *builtin_explosive(m.explosive)});
+
+  for (const auto& t : top.array_of_tables("hole")) {
+    t.check_known({"name", "collar", "end", "direction", "depth", "diameter", "model",
+                   "attenuation_exponent", "charge"});
+    HoleDef h;
+    h.name = t.string("name");
+    h.collar = t.vec("collar");
+    if (t.has("end") == t.has("depth"))
+      throw InputError(fmt::format("{}: a hole needs either 'end' (the bottom point) or "
+                                   "'direction' and 'depth'",
+                                   t.where("end")));
+    if (t.has("end")) {
+      h.end = t.vec("end");
+    } else {
+      const Vec3 d = t.vec("direction");
+      if (norm(d) == 0) throw InputError(fmt::format("{}: a zero vector", t.where("direction")));
+      h.end = h.collar + t.positive("depth") * normalized(d);
+    }
+    if (!(h.length() > 0))
+      throw InputError(fmt::format("{}: the hole has zero length (collar = end)", t.where("end")));
+    h.diameter = t.positive("diameter");
+    h.model = t.choice("model", {"bar", "solid"}, "bar") == "bar" ? ChargeModel::Bar : ChargeModel::Solid;
+    h.attenuation_exponent = t.non_negative("attenuation_exponent", 1.25);
+    const Vec3 up = normalized(h.collar - h.end);
+    double s = 0;  // distance from the bottom
+    for (const auto& q : t.array_of_tables("charge")) {
+      q.check_known({"stemming", "explosive", "length", "delay", "initiation"});
+      if (q.has("stemming")) {
+        if (q.has("explosive"))
+          throw InputError(fmt::format("{}: a charge entry is either stemming or a deck, not both",
+                                       q.where("stemming")));
+        const double l = q.positive("stemming");
+        h.stemming.emplace_back(s, s + l);
+        s += l;
+        continue;
+      }
+      Deck d;
+      d.explosive = q.string("explosive");
+      resolve(d.explosive, q.where("explosive"));
+      d.length = q.positive("length");
+      d.delay = q.non_negative("delay", 0.0);
+      d.initiate_top = q.choice("initiation", {"bottom", "top"}, "bottom") == "top";
+      d.bottom = h.end + s * up;
+      d.top = h.end + (s + d.length) * up;
+      s += d.length;
+      h.decks.push_back(d);
+    }
+    if (h.decks.empty())
+      throw InputError(fmt::format("{}: hole '{}' has no charge: add [[hole.charge]] entries "
+                                   "(explosive, length) from the bottom up",
+                                   t.where("charge"), h.name));
+    if (s > h.length() * (1 + 1e-9))
+      throw InputError(fmt::format("{}: the charges and stemming of hole '{}' add up to {} m, "
+                                   "longer than the hole ({} m)",
+                                   t.where("charge"), h.name, s, h.length()));
+    if (s < h.length()) h.stemming.emplace_back(s, h.length());  // top stemming (not modelled)
+    for (const auto& o : c.holes)
+      if (o.name == h.name) throw InputError(fmt::format("{}: duplicate hole name '{}'", t.where("name"), h.name));
+    c.holes.push_back(h);
+  }
+}
+
 }  // namespace
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
@@ -158,7 +259,7 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   c.dir = fs::absolute(path).parent_path().string();
   const TomlTable top(root, path, "");
   top.check_known({"title", "mesh", "simulation", "material", "interface", "boundary",
-                   "damping_zone", "monitor", "initial_stress"});
+                   "damping_zone", "monitor", "initial_stress", "explosive", "hole"});
   c.title = top.string("title", fs::path(path).stem().string());
 
   // ---- mesh ----
@@ -215,8 +316,9 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     m.name = t.string("name");
     m.regions = t.strings("regions");
     if (m.regions.empty()) throw InputError(fmt::format("{}: lists no region", t.where("regions")));
-    m.density = t.positive("density");
     m.explosive = t.string("explosive", "");
+    // An explosive region's density defaults to the explosive's (filled in below).
+    m.density = m.explosive.empty() ? t.positive("density") : t.positive("density", -1.0);
     m.youngs = m.explosive.empty() ? t.positive("youngs_modulus") : t.positive("youngs_modulus", 1e9);
     m.poisson = t.number("poisson_ratio", m.explosive.empty() ? -1.0 : 0.25);
     if (!(m.poisson > -1.0 && m.poisson < 0.5))
@@ -319,6 +421,15 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     if (is->has("gradient")) c.initial_stress.gradient = sym6(*is, "gradient");
     c.initial_stress.reference_level = is->number("reference_level", 0.0);
   }
+  parse_explosives_and_holes(top, c);
+  // Materials that name an explosive must name a known one; their density defaults to it.
+  for (auto& m : c.materials)
+    if (!m.explosive.empty() && !c.explosive(m.explosive))
+      throw InputError(fmt::format("{}: material '{}': unknown explosive '{}' (built-in: {}; or "
+                                   "define it in [[explosive]])",
+                                   path, m.name, m.explosive, builtin_list()));
+    else if (!m.explosive.empty() && m.density < 0)
+      m.density = explosive_density(c.explosive(m.explosive)->eos);
   return c;
 }
 
@@ -406,6 +517,36 @@ std::string resolved_case_toml(const Case& c) {
                      q(z.region), z.max_damping, z.exponent);
   for (const auto& mo : c.monitors)
     o += fmt::format("\n[[monitor]]\nname = {}\npoint = {}\n", q(mo.name), vec_str(mo.point));
+  for (const auto& e : c.explosives) {
+    o += fmt::format("\n[[explosive]]\nname = {}\neos = {}\n", q(e.name), q(std::string(eos_kind(e.eos))));
+    if (const auto* l = std::get_if<LandauEos>(&e.eos))
+      o += fmt::format("density = {:.17g}\ndetonation_velocity = {:.17g}\ndetonation_heat = {:.17g}\n"
+                       "gamma1 = {:.17g}\ngamma2 = {:.17g}\n",
+                       l->rho_w, l->D, l->Q_w, l->gamma1, l->gamma2);
+    else if (const auto* j = std::get_if<JwlEos>(&e.eos))
+      o += fmt::format("density = {:.17g}\ndetonation_velocity = {:.17g}\nA = {:.17g}\nB = {:.17g}\n"
+                       "R1 = {:.17g}\nR2 = {:.17g}\nomega = {:.17g}\nE0 = {:.17g}\n",
+                       j->rho0, j->D, j->A, j->B, j->R1, j->R2, j->omega, j->E0);
+  }
+  for (const auto& h : c.holes) {
+    o += fmt::format("\n[[hole]]\nname = {}\ncollar = {}\nend = {}\ndiameter = {:.17g}\nmodel = {}\n"
+                     "attenuation_exponent = {:.17g}\n",
+                     q(h.name), vec_str(h.collar), vec_str(h.end), h.diameter,
+                     q(h.model == ChargeModel::Bar ? "bar" : "solid"), h.attenuation_exponent);
+    // Charges from the bottom up, stemming between them.
+    std::vector<std::pair<double, std::string>> items;
+    const Vec3 up = normalized(h.collar - h.end);
+    for (const auto& s : h.stemming)
+      if (s.second < h.length() - 1e-12 || s.first == 0)
+        items.emplace_back(s.first, fmt::format("[[hole.charge]]\nstemming = {:.17g}\n", s.second - s.first));
+    for (const auto& d : h.decks)
+      items.emplace_back(dot(d.bottom - h.end, up),
+                         fmt::format("[[hole.charge]]\nexplosive = {}\nlength = {:.17g}\ndelay = {:.17g}\n"
+                                     "initiation = {}\n",
+                                     q(d.explosive), d.length, d.delay, q(d.initiate_top ? "top" : "bottom")));
+    std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (const auto& it : items) o += it.second;
+  }
   if (c.initial_stress.enabled)
     o += fmt::format("\n[initial_stress]\nstress = {}\ngradient = {}\nreference_level = {:.17g}\n",
                      sym_str(c.initial_stress.at_reference), sym_str(c.initial_stress.gradient),

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cdem/core/vec3.hpp"
+#include "cdem/explosive/eos.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/model/materials.hpp"
 
@@ -57,6 +58,35 @@ struct InitialStress {
   double reference_level = 0;
 };
 
+// A named explosive: a built-in one or one given in [[explosive]].
+struct ExplosiveDef {
+  std::string name;
+  Eos eos;
+};
+
+// One charge (deck) of a hole, placed from the bottom up (SPEC 2).
+struct Deck {
+  std::string explosive;    // name of an ExplosiveDef
+  double length = 0;        // m
+  double delay = 0;         // initiation time t_D0 (s)
+  bool initiate_top = false;  // default: initiated at the deck's bottom
+  Vec3 bottom, top;         // derived end points
+  Vec3 initiation() const { return initiate_top ? top : bottom; }
+};
+
+enum class ChargeModel { Bar, Solid };
+
+struct HoleDef {
+  std::string name;
+  Vec3 collar, end;         // collar (top) and bottom of the hole
+  double diameter = 0;      // m
+  ChargeModel model = ChargeModel::Bar;
+  double attenuation_exponent = 1.25;  // a in (r0 / L_c)^a (bar model)
+  std::vector<Deck> decks;
+  std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
+  double length() const { return norm(collar - end); }
+};
+
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
   std::string dir;          // its directory
@@ -85,6 +115,15 @@ struct Case {
   std::vector<DampingZone> damping_zones;
   std::vector<Monitor> monitors;
   InitialStress initial_stress;
+  std::vector<ExplosiveDef> explosives;  // built-ins used by the case, then [[explosive]]
+  std::vector<HoleDef> holes;
+  double charge_history_interval = 0;    // charges.csv sampling (default: history_interval)
+
+  const ExplosiveDef* explosive(const std::string& name) const {
+    for (const auto& e : explosives)
+      if (e.name == name) return &e;
+    return nullptr;
+  }
 };
 
 // Parse and validate. `overrides` are "dotted.key=value" strings applied on top of the file

@@ -102,8 +102,16 @@ void GmshSession::check_log() {
     const std::string& line = log[i];
     if (line.rfind("Error", 0) == 0) {
       if (first_error.empty()) first_error = line;
+    } else if (line.find("I'm busy! Ask me that later") != std::string::npos) {
+      // Gmsh stays locked after an error inside gmsh::open until it is finalized: only an
+      // outermost session can reset it.
+      if (first_error.empty())
+        first_error = "Gmsh is locked by an earlier error in this session (it did not read the file); "
+                      "use Gmsh from an outermost GmshSession";
     } else if (line.rfind("Warning", 0) == 0) {
       spdlog::warn("{}: gmsh: {}", context_, line);
+    } else {
+      spdlog::debug("{}: gmsh: {}", context_, line);
     }
   }
   log_seen_ = log.size();
@@ -313,7 +321,7 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
 
   // Face sets: physical groups of dimension top - 1; facets sorted by element tag.
   for (const auto& [gdim, gtag] : groups) {
-    if (gdim == 0 && top > 1) {
+    if (gdim == 0) {
       const std::string name = group_name(gdim, gtag);
       if (std::find(mesh.point_names.begin(), mesh.point_names.end(), name) == mesh.point_names.end())
         mesh.point_names.push_back(name);

@@ -111,8 +111,11 @@ struct GenerateSpec {
   std::vector<HoleSpec> holes;
   std::vector<RefineSpec> refine;
   double ring_width = 0;    // cylinder: an outer ring of this width is its own region "ring"
-  double ring_element_size = 0;
+  double ring_element_size = 0;  // element size in the ring (0: element_size)
   std::string region = "rock";  // name of the main region
+  int circle_segments = 16;  // curved walls: at least this many elements per full turn (sizes
+                             // from curvature, Mesh.MeshSizeFromCurvature); 0: sizes from the
+                             // field only
 };
 // Face sets of generated meshes: rectangle "left" "right" "bottom" "top"; box the same plus
 // "front" (y min) and "back" (y max), with "bottom"/"top" at z min/max; cylinder "side",
@@ -123,8 +126,10 @@ struct GenerateSpec {
 // is the part of its boundary inside the body (the interface with the rock when it is filled).
 // Filled holes and the ring are meshed conformally with the rock (OpenCASCADE fragment). Holes
 // with the same region name form one region. The size field is the minimum of the global size
-// (ring_element_size in the ring) and each refinement; sizes from points, curvature and
-// boundaries are off. Throws MeshError for a bad spec (unknown shape, non-positive sizes, a
+// (ring_element_size in the ring) and each refinement; on curved walls also at most the size
+// that cuts a full turn into circle_segments; sizes from points and boundaries are off.
+// 2D quads: Frontal-Delaunay triangles recombined by blossom matching (quad-dominant; all quads
+// on the shapes tried). Throws MeshError for a bad spec (unknown shape, non-positive sizes, a
 // hole outside the body, ...) or when Gmsh fails.
 Mesh generate_mesh(const GenerateSpec& spec);
 

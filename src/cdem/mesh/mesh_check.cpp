@@ -159,7 +159,7 @@ class Checker {
       if (!(std::abs(v6) >= degenerate_tol * mean))
         fail_elem(e, fmt::format("degenerate element (volume {:g} m^3, mean {:g} m^3)", v6 / 6, mean / 6));
       if (v6 < 0)
-        fail_elem(e, fmt::format("inverted tetrahedron (negative volume {:g} m^3)", v6 / 6));
+        fail_elem(e, fmt::format("inverted tetrahedron (negative volume): V = {:g} m^3", v6 / 6));
     }
   }
 };

@@ -36,6 +36,16 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   e_initial_ = energy().mechanical();
 }
 
+void Simulation::limit_dt(double dt_max, const std::string& what) {
+  if (!(dt_max > 0) || !std::isfinite(dt_max)) return;
+  const double safety = stable_.dt / std::min(stable_.dt_block, stable_.dt_spring);
+  if (safety * dt_max < dt_) {
+    dt_ = safety * dt_max;
+    stable_.dt = dt_;
+    stable_.limit = what;
+  }
+}
+
 void Simulation::setup_damping_zones(const Case& c) {
   for (const auto& z : c.damping_zones) {
     int region = -1;
@@ -142,13 +152,16 @@ void Simulation::step(bool sample) {
   spring_forces(m_, dt_, t_);
   gather_spring_forces(m_);
   // 4. (general contact: not yet) 5. explosive and other loads
-  for (auto& h : loads_) w_explosive_ += h(m_, t_, dt_) * dt_;
+  applied_.clear();
+  for (auto& h : loads_) h(m_, applied_, t_);
   // 6. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
   // 7. integration with gravity and damping
   integrate(m_, bc_.gravity, dt_, node_dissipated_, sample ? ke_.data() : nullptr);
   // 8. velocity constraints (prescribed at the mid-step time)
   w_boundary_ += apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_);
+  for (std::size_t i = 0; i < applied_.node.size(); ++i)
+    w_explosive_ += dot(applied_.force[i], 0.5 * (applied_.v_old[i] + m_.v[applied_.node[i]])) * dt_;
   double absorbed = 0;
   w_boundary_ += load_work(m_, bc_, dt_, &absorbed);
   w_absorbed_ += absorbed;

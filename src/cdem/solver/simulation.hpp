@@ -29,10 +29,28 @@ struct EnergyBalance {
   double mechanical() const { return kinetic + block_strain + spring_strain; }
 };
 
+// Forces applied by extra loads during a step, kept so that their work can be integrated with
+// the mid-step velocity: W += F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt.
+struct AppliedLoads {
+  std::vector<std::int32_t> node;
+  std::vector<Vec3> force, v_old;
+  void clear() {
+    node.clear();
+    force.clear();
+    v_old.clear();
+  }
+  // Adds f to node n of the model and records it.
+  void add(Model& m, std::int32_t n, Vec3 f) {
+    m.f[n] += f;
+    node.push_back(n);
+    force.push_back(f);
+    v_old.push_back(m.v[n]);
+  }
+};
+
 // An extra load applied every step after the block and spring forces (the explosive models
-// plug in here). It adds to m.f and returns the power it delivers (W) at that step, so its
-// work can be integrated.
-using LoadHook = std::function<double(Model&, double t, double dt)>;
+// plug in here): it adds its forces through AppliedLoads at time t.
+using LoadHook = std::function<void(Model&, AppliedLoads&, double t)>;
 
 class Simulation {
  public:
@@ -54,6 +72,8 @@ class Simulation {
   EnergyBalance energy() const;
 
   void add_load(LoadHook hook) { loads_.push_back(std::move(hook)); }
+  // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it.
+  void limit_dt(double dt_max, const std::string& what);
   void add_explosive_work(double w) { w_explosive_ += w; }
 
  private:
@@ -64,6 +84,7 @@ class Simulation {
   Boundaries bc_;
   StableStep stable_;
   std::vector<LoadHook> loads_;
+  AppliedLoads applied_;
   double t_ = 0, dt_ = 0;
   std::int64_t steps_ = 0;
   std::int64_t inverted_ = 0;

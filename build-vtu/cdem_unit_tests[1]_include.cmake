@@ -1,5 +1,0 @@
-if(EXISTS "/work/main/build-vtu/cdem_unit_tests[1]_tests.cmake")
-  include("/work/main/build-vtu/cdem_unit_tests[1]_tests.cmake")
-else()
-  add_test(cdem_unit_tests_NOT_BUILT cdem_unit_tests_NOT_BUILT)
-endif()

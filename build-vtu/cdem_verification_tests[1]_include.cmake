@@ -1,5 +1,0 @@
-if(EXISTS "/work/main/build-vtu/cdem_verification_tests[1]_tests.cmake")
-  include("/work/main/build-vtu/cdem_verification_tests[1]_tests.cmake")
-else()
-  add_test(cdem_verification_tests_NOT_BUILT cdem_verification_tests_NOT_BUILT)
-endif()

@@ -1,0 +1,350 @@
+#include "cdem/explosive/charges.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "cdem/core/error.hpp"
+#include "cdem/mesh/element_geometry.hpp"
+
+namespace cdem {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Interval {
+  double s0, s1;
+  std::int32_t block;
+};
+
+// Clips the segment p + s d, s in [0, 1], against block b (reference configuration). Faces are
+// widened by tol (m) so that a bar along a face or edge is inside both neighbours.
+bool clip(const Model& m, std::int32_t b, Vec3 p, Vec3 d, double tol, double& s0, double& s1) {
+  const auto n0 = m.block_first_node[b];
+  const ElemType t = m.block_type[b];
+  const LocalFaces lf = local_faces(t);
+  s0 = 0.0;
+  s1 = 1.0;
+  for (int k = 0; k < lf.count; ++k) {
+    Vec3 q[3];
+    for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = m.X[n0 + lf.f[k][i]];
+    const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(q, lf.nodes_per_face), lf.nodes_per_face));
+    // inside: (p + s d - q0) . n <= tol
+    const double a = dot(p - q[0], n) - tol, bd = dot(d, n);
+    if (std::abs(bd) < 1e-300) {
+      if (a > 0) return false;
+      continue;
+    }
+    const double s = -a / bd;
+    if (bd > 0)
+      s1 = std::min(s1, s);
+    else
+      s0 = std::max(s0, s);
+    if (s0 > s1) return false;
+  }
+  return s1 > s0;
+}
+
+void block_bbox(const Model& m, std::int32_t b, Vec3& lo, Vec3& hi) {
+  lo = hi = m.X[m.block_first_node[b]];
+  for (auto n = m.block_first_node[b] + 1; n < m.block_first_node[b + 1]; ++n)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], m.X[n][k]);
+      hi[k] = std::max(hi[k], m.X[n][k]);
+    }
+}
+
+std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names, const Case& c,
+                       const std::string& name) {
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<std::int32_t>(i);
+  names.push_back(name);
+  table.push_back(c.explosive(name)->eos);
+  return static_cast<std::int32_t>(table.size() - 1);
+}
+
+}  // namespace
+
+void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
+  const auto n0 = m.block_first_node[b];
+  const LocalFaces lf = local_faces(m.block_type[b]);
+  Vec3 fn[4] = {};
+  for (int k = 0; k < lf.count; ++k) {
+    Vec3 q[3];
+    for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = m.x[n0 + lf.f[k][i]];
+    const Vec3 a = face_area_vector(std::span<const Vec3>(q, lf.nodes_per_face), lf.nodes_per_face);
+    const Vec3 share = (p / lf.nodes_per_face) * a;
+    for (int i = 0; i < lf.nodes_per_face; ++i) fn[lf.f[k][i]] += share;
+  }
+  const int nn = nodes_of(m.block_type[b]);
+  for (int i = 0; i < nn; ++i) out.add(m, n0 + i, fn[i]);
+}
+
+BarCharges build_bar_charges(const Model& m, const Case& c) {
+  BarCharges bc;
+  std::vector<std::string> eos_names;
+  std::vector<std::vector<std::int32_t>> elem_segs;  // by block, filled sparsely
+  std::vector<std::int32_t> elem_slot(m.n_blocks(), -1);
+  std::vector<Vec3> lo(m.n_blocks()), hi(m.n_blocks());
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) block_bbox(m, static_cast<std::int32_t>(b), lo[b], hi[b]);
+
+  for (const auto& hole : c.holes) {
+    if (hole.model != ChargeModel::Bar) continue;
+    for (std::size_t di = 0; di < hole.decks.size(); ++di) {
+      const Deck& deck = hole.decks[di];
+      const std::string where = fmt::format("{}: hole '{}', deck {} ({} m of '{}')", c.path,
+                                            hole.name, di + 1, deck.length, deck.explosive);
+      BarCharges::Bar bar;
+      bar.hole = hole.name;
+      bar.deck = static_cast<int>(di);
+      bar.eos = eos_index(bc.eos, eos_names, c, deck.explosive);
+      bar.r0 = 0.5 * hole.diameter;
+      bar.D = detonation_velocity(bc.eos[bar.eos]);
+      bar.t0 = deck.delay;
+      bar.length = deck.length;
+      bar.attenuation = hole.attenuation_exponent;
+      bar.start = deck.initiation();
+      const Vec3 other = deck.initiate_top ? deck.bottom : deck.top;
+      bar.dir = normalized(other - bar.start);
+      const Vec3 d = other - bar.start;
+      // ---- the blocks the bar's line passes through ----
+      Vec3 blo = bar.start, bhi = bar.start;
+      for (int k = 0; k < 3; ++k) {
+        blo[k] = std::min(blo[k], other[k]);
+        bhi[k] = std::max(bhi[k], other[k]);
+      }
+      std::vector<Interval> iv;
+      for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+        const double tol = 1e-6 * m.block_size[b];
+        bool overlap = true;
+        for (int k = 0; k < 3 && overlap; ++k)
+          overlap = lo[b][k] - tol <= bhi[k] && blo[k] <= hi[b][k] + tol;
+        if (!overlap) continue;
+        double s0, s1;
+        const auto bi = static_cast<std::int32_t>(b);
+        if (clip(m, bi, bar.start, d, tol, s0, s1) && (s1 - s0) * bar.length > 1e-9 * m.block_size[b]) {
+          if (!m.block_materials[m.block_material[b]].explosive.empty())
+            throw InputError(fmt::format("{}: the bar runs through explosive blocks (region '{}'); "
+                                         "a bar charge needs rock around it: give the region a rock "
+                                         "material or set the hole's model = \"solid\"",
+                                         where, m.region_names[m.block_region[b]]));
+          iv.push_back({s0, s1, bi});
+        }
+      }
+      // ---- coverage: the bar must lie inside the mesh over its whole length ----
+      std::sort(iv.begin(), iv.end(), [](const Interval& a, const Interval& b) { return a.s0 < b.s0; });
+      double reach = 0.0;
+      const double gap_tol = 1e-6;
+      for (const auto& x : iv) {
+        if (x.s0 > reach + gap_tol) break;
+        reach = std::max(reach, x.s1);
+      }
+      if (iv.empty() || reach < 1.0 - gap_tol) {
+        const Vec3 p = bar.start + (reach * bar.length) * bar.dir;
+        throw InputError(fmt::format("{}: the bar leaves the mesh or crosses a void {:.4g} m from "
+                                     "its initiation point, at ({:.4g}, {:.4g}, {:.4g}); a bar "
+                                     "must lie inside rock elements over its whole length",
+                                     where, reach * bar.length, p.x, p.y, p.z));
+      }
+      // ---- segmentation: no longer than the smallest crossed element ----
+      double hmin = std::numeric_limits<double>::infinity();
+      for (const auto& x : iv) hmin = std::min(hmin, m.block_size[x.block]);
+      const int nseg = std::max(1, static_cast<int>(std::ceil(bar.length / hmin - 1e-9)));
+      bar.h = bar.length / nseg;
+      bar.seg_begin = static_cast<std::int32_t>(bc.seg_bar.size());
+      if (bc.seg_elem_offset.empty()) bc.seg_elem_offset.push_back(0);
+      for (int j = 0; j < nseg; ++j) {
+        const double a0 = static_cast<double>(j) / nseg, a1 = static_cast<double>(j + 1) / nseg;
+        const auto sj = static_cast<std::int32_t>(bc.seg_bar.size());
+        bc.seg_bar.push_back(static_cast<std::int32_t>(bc.bars.size()));
+        const double dj = (j + 0.5) * bar.h;  // distance of the centre from the initiation point
+        bc.seg_t_ign.push_back(bar.t0 + dj / bar.D);
+        bc.seg_v0.push_back(m.dim == 3 ? kPi * bar.r0 * bar.r0 * bar.h : 2.0 * bar.r0 * bar.h);
+        for (const auto& x : iv) {
+          const double ov = std::min(a1, x.s1) - std::max(a0, x.s0);
+          if (ov * bar.length <= 1e-9 * m.block_size[x.block]) continue;
+          bc.seg_elem.push_back(x.block);
+          if (elem_slot[x.block] < 0) {
+            elem_slot[x.block] = static_cast<std::int32_t>(bc.elem_block.size());
+            bc.elem_block.push_back(x.block);
+            const double att = std::pow(bar.r0 / m.block_size[x.block], bar.attenuation);
+            bc.elem_atten.push_back(std::min(1.0, att));
+            elem_segs.emplace_back();
+          }
+          elem_segs[elem_slot[x.block]].push_back(sj);
+        }
+        bc.seg_elem_offset.push_back(static_cast<std::int32_t>(bc.seg_elem.size()));
+      }
+      bar.seg_end = static_cast<std::int32_t>(bc.seg_bar.size());
+      bc.bars.push_back(bar);
+    }
+  }
+  bc.elem_seg_offset.assign(1, 0);
+  for (const auto& v : elem_segs) {
+    bc.elem_seg.insert(bc.elem_seg.end(), v.begin(), v.end());
+    bc.elem_seg_offset.push_back(static_cast<std::int32_t>(bc.elem_seg.size()));
+  }
+  bc.seg_p.assign(bc.seg_bar.size(), 0.0);
+  bc.seg_v.assign(bc.seg_bar.size(), 1.0);
+  bc.seg_xi.assign(bc.seg_bar.size(), 0.0);
+  bc.elem_sigma.assign(bc.elem_block.size(), 0.0);
+  return bc;
+}
+
+void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
+  const std::size_t ns = bc.n_segments();
+  for (std::size_t j = 0; j < ns; ++j) {
+    const auto& bar = bc.bars[bc.seg_bar[j]];
+    double theta = 0;
+    const auto e0 = bc.seg_elem_offset[j], e1 = bc.seg_elem_offset[j + 1];
+    for (auto e = e0; e < e1; ++e) theta += m.vol_ratio[bc.seg_elem[e]] - 1.0;
+    const double v = 1.0 + theta / (e1 - e0);                               // eq. 9
+    const double xi = std::clamp((t - bc.seg_t_ign[j]) * bar.D / bar.h, 0.0, 1.0);  // eq. 12, 13
+    bc.seg_v[j] = v;
+    bc.seg_xi[j] = xi;
+    bc.seg_p[j] = xi > 0 ? xi * eos_pressure(bc.eos[bar.eos], v) : 0.0;     // eq. 10, 11
+  }
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+    double pbar = 0;
+    const auto s0 = bc.elem_seg_offset[i], s1 = bc.elem_seg_offset[i + 1];
+    for (auto s = s0; s < s1; ++s) pbar += bc.seg_p[bc.elem_seg[s]];
+    pbar /= (s1 - s0);                                                      // eq. 14
+    bc.elem_sigma[i] = pbar * bc.elem_atten[i];                             // eq. 15
+    if (bc.elem_sigma[i] > 0) inflate_block(m, bc.elem_block[i], bc.elem_sigma[i], out);  // eq. 16
+  }
+}
+
+SolidCharges build_solid_charges(const Model& m, const Case& c) {
+  SolidCharges sc;
+  std::vector<std::string> eos_names;
+  struct DeckRef {
+    const HoleDef* hole;
+    std::size_t deck;
+    std::int32_t charge;
+  };
+  std::vector<DeckRef> decks;
+  for (const auto& h : c.holes) {
+    if (h.model != ChargeModel::Solid) continue;
+    for (std::size_t d = 0; d < h.decks.size(); ++d) {
+      SolidCharges::Charge ch;
+      ch.hole = h.name;
+      ch.deck = static_cast<int>(d);
+      ch.eos = eos_index(sc.eos, eos_names, c, h.decks[d].explosive);
+      ch.D = detonation_velocity(sc.eos[ch.eos]);
+      decks.push_back({&h, d, static_cast<std::int32_t>(sc.charges.size())});
+      sc.charges.push_back(ch);
+    }
+  }
+  std::vector<int> used(sc.charges.size(), 0);
+  sc.dt_limit = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    if (m.block_materials[m.block_material[b]].explosive.empty()) continue;
+    Vec3 cen{};
+    const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
+    for (auto n = n0; n < n1; ++n) cen += m.X[n];
+    cen = cen / (n1 - n0);
+    // The deck whose axis segment is nearest, within its radius plus the block size.
+    int best = -1;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < decks.size(); ++k) {
+      const Deck& d = decks[k].hole->decks[decks[k].deck];
+      const Vec3 ax = d.top - d.bottom;
+      const double s = std::clamp(dot(cen - d.bottom, ax) / dot(ax, ax), 0.0, 1.0);
+      const double dist = norm(cen - (d.bottom + s * ax));
+      if (dist <= 0.5 * decks[k].hole->diameter + 0.5 * m.block_size[b] && dist < best_d) {
+        best_d = dist;
+        best = static_cast<int>(k);
+      }
+    }
+    if (best < 0)
+      throw InputError(fmt::format("{}: explosive block (element {} of region '{}') at ({:.4g}, "
+                                   "{:.4g}, {:.4g}) is not inside the charge of any hole with "
+                                   "model = \"solid\"",
+                                   c.path, m.block_elem_tag[b], m.region_names[m.block_region[b]],
+                                   cen.x, cen.y, cen.z));
+    const auto& ref = decks[best];
+    const Deck& d = ref.hole->decks[ref.deck];
+    const double D = sc.charges[ref.charge].D;
+    sc.block.push_back(static_cast<std::int32_t>(b));
+    sc.charge.push_back(ref.charge);
+    sc.t_ign.push_back(d.delay + norm(cen - d.initiation()) / D);
+    sc.burn_time.push_back(m.block_size[b] / D);
+    sc.v0.push_back(m.block_volume0[b]);
+    sc.dt_limit = std::min(sc.dt_limit, m.block_altitude0[b] / D);
+    used[ref.charge] = 1;
+  }
+  for (std::size_t k = 0; k < sc.charges.size(); ++k)
+    if (!used[k])
+      throw InputError(fmt::format("{}: hole '{}' (model = \"solid\"), deck {}: no explosive blocks "
+                                   "inside it; mesh the charge as a region whose material has "
+                                   "'explosive' set",
+                                   c.path, sc.charges[k].hole, sc.charges[k].deck + 1));
+  sc.p.assign(sc.block.size(), 0.0);
+  sc.lambda.assign(sc.block.size(), 0.0);
+  sc.dead.assign(sc.block.size(), 0);
+  sc.v.assign(sc.block.size(), 1.0);
+  return sc;
+}
+
+void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
+  for (std::size_t i = 0; i < sc.block.size(); ++i) {
+    const auto b = sc.block[i];
+    const auto n0 = m.block_first_node[b];
+    const int nn = nodes_of(m.block_type[b]);
+    Vec3 p[4];
+    for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
+    const double v = signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
+    m.vol_ratio[b] = v;
+    sc.v[i] = v;
+    if (!sc.dead[i] && !(v > sc.min_volume_ratio)) {
+      sc.dead[i] = 1;
+      ++sc.dead_count;
+      spdlog::warn("t = {:.6g} s: explosive block {} (element {}) collapsed (volume ratio {:.3g}); "
+                   "it stops carrying pressure",
+                   t, b, m.block_elem_tag[b], v);
+    }
+    const auto& ch = sc.charges[sc.charge[i]];
+    const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
+    sc.lambda[i] = lam;
+    const double pr = (sc.dead[i] || lam <= 0) ? 0.0 : lam * eos_pressure(sc.eos[ch.eos], v);
+    sc.p[i] = pr;
+    m.stress[b] = {-pr, -pr, -pr, 0, 0, 0};
+    if (pr > 0) inflate_block(m, b, pr, out);
+  }
+}
+
+void write_charge_header(std::FILE* f) {
+  std::fputs("time,hole,deck,model,pressure,volume_ratio,burnt_fraction\n", f);
+}
+
+void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const SolidCharges& sc) {
+  for (const auto& bar : bc.bars) {
+    double p = 0, v = 0, xi = 0;
+    const int n = bar.seg_end - bar.seg_begin;
+    for (auto j = bar.seg_begin; j < bar.seg_end; ++j) {
+      p += bc.seg_p[j];
+      v += bc.seg_v[j];
+      xi += bc.seg_xi[j];
+    }
+    std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g\n", t, bar.hole.c_str(), bar.deck + 1, p / n,
+                 v / n, xi / n);
+  }
+  for (std::size_t k = 0; k < sc.charges.size(); ++k) {
+    // Volume-weighted means over the deck's explosive blocks.
+    double p = 0, vol0 = 0, vol = 0, burnt = 0;
+    for (std::size_t i = 0; i < sc.block.size(); ++i) {
+      if (sc.charge[i] != static_cast<std::int32_t>(k)) continue;
+      p += sc.p[i] * sc.v0[i];
+      vol0 += sc.v0[i];
+      vol += sc.v[i] * sc.v0[i];
+      burnt += sc.lambda[i] * sc.v0[i];
+    }
+    std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g\n", t, sc.charges[k].hole.c_str(),
+                 sc.charges[k].deck + 1, p / vol0, vol / vol0, burnt / vol0);
+  }
+}
+
+}  // namespace cdem

@@ -1,0 +1,102 @@
+// The two explosive models (SPEC 2 and 3), loading the rock each step after the block and
+// spring forces.
+//
+// Bar model (SPEC 2, eq. 8-16): each deck is a bar from its initiation end, cut into segments
+// no longer than the smallest element it crosses; each segment is bound to every elastic block
+// its line passes through (clipping against the element's faces with a small tolerance, so a
+// bar running along a face or an edge binds the elements on both sides). Per step:
+//   theta_e = mean (J - 1) of the bound blocks, V = V0 (1 + theta_e)            (eq. 9)
+//   P = Landau/JWL(V / V0)                                                      (eq. 10, 11)
+//   t_1 = t_D0 + d_j / D, xi = clamp((t - t_1) D / h, 0, 1), P_r = xi P          (eq. 12, 13)
+//   per bound block: P_bar = mean P_r of its segments, sigma_b = -P_bar (r0 / L_c)^a (eq. 14, 15)
+//   nodal force F^N = -sigma_b sum over the faces k at N of n^k dS^k / (nodes of face k) (eq. 16)
+// The factor (r0 / L_c)^a is capped at 1: an element smaller than the charge radius sees the
+// full bar pressure, never more.
+//
+// Solid model (SPEC 3): explosive blocks (a region whose material names an explosive) inside
+// a hole with model = "solid". Each gets P = lambda EOS(V / V0) with its current volume V and a
+// programmed burn: ignition at t_D0 + |centroid - initiation point| / D, lambda rising from 0 to
+// 1 over L_c / D. Pressure only (no shear stiffness); joined to the rock by unbreakable
+// interfaces (mesh/topology.cpp). A block whose volume ratio falls below min_volume_ratio (or
+// inverts) is reported once and stops carrying pressure.
+#pragma once
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cdem/explosive/eos.hpp"
+#include "cdem/io/case.hpp"
+#include "cdem/model/model.hpp"
+#include "cdem/solver/simulation.hpp"
+
+namespace cdem {
+
+struct BarCharges {
+  struct Bar {
+    std::string hole;
+    int deck = 0;
+    std::int32_t eos = 0;        // index into eos
+    double r0 = 0, D = 0, t0 = 0, length = 0, h = 0, attenuation = 1.25;
+    Vec3 start, dir;             // initiation point and unit direction along the bar
+    std::int32_t seg_begin = 0, seg_end = 0;
+  };
+  std::vector<Bar> bars;
+  std::vector<Eos> eos;
+  // segments
+  std::vector<std::int32_t> seg_bar;
+  std::vector<double> seg_t_ign, seg_v0;   // ignition time (s), V0 = pi r0^2 h (3D) or 2 r0 h (2D)
+  std::vector<std::int32_t> seg_elem_offset, seg_elem;  // CSR: segment -> bound blocks
+  std::vector<double> seg_p, seg_v, seg_xi;             // state: P (Pa), V / V0, xi
+  // loaded elements
+  std::vector<std::int32_t> elem_block;
+  std::vector<double> elem_atten;                       // min(1, (r0 / L_c)^a)
+  std::vector<std::int32_t> elem_seg_offset, elem_seg;  // CSR: element -> segments
+  std::vector<double> elem_sigma;                       // applied pressure (Pa)
+
+  bool empty() const { return bars.empty(); }
+  std::size_t n_segments() const { return seg_bar.size(); }
+};
+
+// Builds the bars of every hole with model = "bar". Throws InputError naming the hole and deck
+// when a bar leaves the mesh or crosses a void.
+BarCharges build_bar_charges(const Model& m, const Case& c);
+
+// Loads the rock at time t (adds to m.f through `out`).
+void bar_loads(Model& m, BarCharges& bars, AppliedLoads& out, double t);
+
+struct SolidCharges {
+  struct Charge {
+    std::string hole;
+    int deck = 0;
+    std::int32_t eos = 0;
+    double D = 0;
+  };
+  std::vector<Charge> charges;
+  std::vector<Eos> eos;
+  std::vector<std::int32_t> block, charge;  // per explosive block
+  std::vector<double> t_ign, burn_time, p, lambda, v0, v;  // v0: initial volume, v: V / V0
+  std::vector<std::uint8_t> dead;
+  double min_volume_ratio = 0.05;
+  std::int64_t dead_count = 0;
+  double dt_limit = 0;  // min altitude / D over explosive blocks (s)
+
+  bool empty() const { return block.empty(); }
+};
+
+// Binds every explosive block to the solid-model deck that contains it. Throws InputError for
+// an explosive block outside every solid-model deck, or a solid-model hole with no blocks.
+SolidCharges build_solid_charges(const Model& m, const Case& c);
+
+// Loads the rock from the explosive blocks at time t.
+void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);
+
+// charges.csv: per deck and time, the mean applied pressure, the charge volume ratio, the
+// burnt fraction.
+void write_charge_header(std::FILE* f);
+void write_charge_rows(std::FILE* f, double t, const BarCharges& bars, const SolidCharges& solids);
+
+// Adds to the nodes of block b the forces of a uniform pressure p (Pa) on all its faces, in
+// the current geometry: F^N = p sum_k n^k dS^k / n_k (outward: inflates; net force zero).
+void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out);
+
+}  // namespace cdem

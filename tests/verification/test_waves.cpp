@@ -1,0 +1,258 @@
+// Verification: 1D P-wave in a long bar of CDEM blocks joined by unbreakable elastic springs.
+//
+// Set-up (plane strain, unit thickness): a bar of nx x ny square quads of side h along x,
+// rollers (v_y = 0) on the top and bottom faces, a pressure p0 on the left end rising linearly
+// to p0 over t_r and then held, the right end free (its reflection never reaches the
+// measurement points in the simulated time). The interfaces use the 'elastic' law with
+// stiffness factor alpha: k_n = alpha E / h per unit area (h = sqrt(A) of the square blocks).
+//
+// Expected wave speed (long-wave limit of the discrete bar, derived here for this set-up):
+// along x every cell is a block of length h in series with one normal spring point pair, so the
+// axial compliance of a cell is the sum of the block's and the spring's:
+//   h / M_cell = h / M_lat + 1 / k_n   ->   1 / M_cell = 1 / M_lat + 1 / (alpha E).
+// M_lat is the block's axial modulus under the lateral condition of the set-up. With rollers
+// on y = 0 and y = H and ny rows, the ny - 1 horizontal interfaces between rows are springs in
+// series with the blocks across the height; sigma_yy is uniform across the rows (lateral
+// equilibrium) and the total lateral displacement is zero:
+//   ny h eps_yy + (ny - 1) h sigma_yy / (alpha E) = 0  ->  eps_yy = -c_l sigma_yy,
+//   c_l = (ny - 1) / (ny alpha E).
+// With the plane-strain block law sigma_xx = M eps_xx + lambda eps_yy,
+// sigma_yy = lambda eps_xx + M eps_yy (M = lambda + 2 G, the P-wave modulus):
+//   sigma_yy = lambda eps_xx / (1 + M c_l),  M_lat = M - lambda^2 c_l / (1 + M c_l).
+// (ny = 1 gives M_lat = M exactly: the 1D-strain condition.) Then c_eff = sqrt(M_cell / rho);
+// the stress behind the front is -p0 (traction continuity) and the particle velocity
+// v = p0 / (rho c_eff) (momentum balance across the front, impedance rho c_eff).
+// SPEC 1.3 quotes this as 1/E_eff = 1/E + 1/(k_n h): the same series-spring rule.
+//
+// Measurement: two monitor blocks at x1 and x2 (block stress sampled every step); the arrival
+// time is when -sigma_xx first reaches p0 / 2 (linear interpolation between steps). The
+// linear-ramp front is antisymmetric about its half level, so the half level travels at the
+// long-wave speed while the lattice dispersion spreads the front symmetrically around it; the
+// ramp's own delay cancels in t2 - t1. The speed is (x2 - x1) / (t2 - t1).
+// Results are tabulated in docs/verification_waves_lame.md.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cdem/analysis/monitors.hpp"
+#include "cdem/io/case.hpp"
+#include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/mesh/mesh.hpp"
+#include "cdem/mesh/topology.hpp"
+#include "cdem/model/materials.hpp"
+#include "cdem/solver/simulation.hpp"
+
+namespace cdem {
+namespace {
+
+// Rock of SPEC 5.1: E 10 GPa, nu 0.25, rho 2500 kg/m3 (M = 12 GPa, c_p = 2190.9 m/s).
+constexpr double kE = 10e9, kNu = 0.25, kRho = 2500.0;
+constexpr double kP0 = 1e6;  // Pa: strain ~1e-4, geometric non-linearity negligible (1e-4)
+
+// nx x ny square quads of side h from the origin; face sets left, right, bottom, top.
+Mesh bar_mesh(int nx, int ny, double h) {
+  Mesh m;
+  m.dim = 2;
+  m.region_names = {"rock"};
+  auto vid = [&](int i, int j) { return static_cast<std::int32_t>(j * (nx + 1) + i); };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.vertices.push_back({i * h, j * h, 0.0});
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      m.elem_type.push_back(ElemType::Quad4);
+      m.elem_vertices.push_back({vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)});
+      m.elem_region.push_back(0);
+      m.elem_tag.push_back(static_cast<std::int64_t>(m.elem_tag.size() + 1));
+    }
+  FaceSet left{"left", {}}, right{"right", {}}, bottom{"bottom", {}}, top{"top", {}};
+  for (int j = 0; j < ny; ++j) {
+    left.facets.push_back({{vid(0, j + 1), vid(0, j), -1}});
+    right.facets.push_back({{vid(nx, j), vid(nx, j + 1), -1}});
+  }
+  for (int i = 0; i < nx; ++i) {
+    bottom.facets.push_back({{vid(i, 0), vid(i + 1, 0), -1}});
+    top.facets.push_back({{vid(i + 1, ny), vid(i, ny), -1}});
+  }
+  m.face_sets = {left, right, bottom, top};
+  check_mesh(m, "test_waves bar");
+  return m;
+}
+
+struct WaveResult {
+  double c_measured = 0;   // m/s
+  double c_predicted = 0;  // m/s, series-spring formula above
+  double sigma_plateau = 0;  // Pa, mean sigma_xx behind the front at x1 (expected -p0)
+  double v_measured = 0;   // m/s, mean particle velocity behind the front at x1
+  double v_predicted = 0;  // p0 / (rho c_eff)
+  double dt = 0;
+  std::int64_t steps = 0;
+  std::size_t blocks = 0;
+  double wall_s = 0;
+};
+
+WaveResult run_bar(double alpha) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  // h = 1 cm, 3 m long (300 cells), 2 rows: 600 blocks.
+  const int nx = 300, ny = 2;
+  const double h = 0.01, length = nx * h;
+  const double x1 = 0.755, x2 = 2.255;  // block centres (column 75 and 225)
+
+  BlockMaterial rock;
+  rock.name = "rock";
+  rock.regions = {"rock"};
+  rock.density = kRho;
+  rock.youngs = kE;
+  rock.poisson = kNu;
+  InterfaceMaterial bond;
+  bond.name = "bond";
+  bond.law = InterfaceLaw::Elastic;
+  bond.stiffness_factor = alpha;
+  bond.is_default = true;
+
+  // Prediction (see the header comment).
+  const double lam = rock.lambda(), M = rock.lambda() + 2 * rock.shear();
+  const double cl = (ny - 1) / (ny * alpha * kE);
+  const double m_lat = M - lam * lam * cl / (1 + M * cl);
+  const double m_cell = 1.0 / (1.0 / m_lat + 1.0 / (alpha * kE));
+  WaveResult r;
+  r.c_predicted = std::sqrt(m_cell / kRho);
+  r.v_predicted = kP0 / (kRho * r.c_predicted);
+
+  // Ramp over 20 cell transits: smooth enough that the lattice ringing behind the front stays
+  // small, short (0.09 ms) compared with the 0.68 ms between the two monitors.
+  const double t_ramp = 20 * h / rock.cp();
+  Case c;
+  c.path = "test_waves (in-code case)";
+  c.title = "p_wave_bar";
+  c.dt_safety = 0.5;
+  c.materials = {rock};
+  c.interfaces = {bond};
+  BoundaryCondition load;
+  load.faces = "left";
+  load.type = BoundaryType::Pressure;
+  load.value = kP0;
+  load.table.points = {{0.0, 0.0}, {t_ramp, 1.0}};
+  BoundaryCondition top, bottom;
+  top.faces = "top";
+  top.type = BoundaryType::Roller;
+  bottom.faces = "bottom";
+  bottom.type = BoundaryType::Roller;
+  c.boundaries = {load, top, bottom};
+
+  Simulation sim(build_model(bar_mesh(nx, ny, h), c.materials, c.interfaces, c.path), c);
+  const Model& m = sim.model();
+  const auto b1 = find_block(m, {x1, 0.5 * h, 0});
+  const auto b2 = find_block(m, {x2, 0.5 * h, 0});
+  EXPECT_GE(b1, 0);
+  EXPECT_GE(b2, 0);
+  if (b1 < 0 || b2 < 0) return r;
+
+  // Simulated time: until the front (at c_p, an upper bound of c_eff) plus its ramp has passed
+  // x2 by a margin; the reflection from the free right end comes back to x2 at
+  // (2 L - x2) / c_eff = 1.7 ms, after the end (1.3 ms).
+  const double t_end = 1.3e-3;
+  EXPECT_LT(t_end, (2 * length - x2) / rock.cp());
+  double t1 = -1, t2 = -1, prev1 = 0, prev2 = 0, prev_t = 0;
+  double v_sum = 0, s_sum = 0;
+  std::int64_t n_avg = 0;
+  while (sim.time() < t_end) {
+    const double t_state = sim.time();  // stresses after this step are at t_n = this time
+    sim.step();
+    const double s1 = -m.stress[b1][0], s2 = -m.stress[b2][0];
+    if (t1 < 0 && s1 >= 0.5 * kP0 && t_state > 0)
+      t1 = prev_t + (t_state - prev_t) * (0.5 * kP0 - prev1) / (s1 - prev1);
+    if (t2 < 0 && s2 >= 0.5 * kP0 && t_state > 0)
+      t2 = prev_t + (t_state - prev_t) * (0.5 * kP0 - prev2) / (s2 - prev2);
+    // Plateau at x1: from 0.3 ms after the arrival (ramp 0.09 ms plus the front's spread) to the
+    // end, before any reflection can come back to x1.
+    if (t1 > 0 && t_state > t1 + 0.3e-3) {
+      v_sum += sample_block(m, b1).velocity.x;
+      s_sum += m.stress[b1][0];
+      ++n_avg;
+    }
+    prev1 = s1;
+    prev2 = s2;
+    prev_t = t_state;
+  }
+  EXPECT_GT(t1, 0) << "the front never reached x1";
+  EXPECT_GT(t2, 0) << "the front never reached x2";
+  EXPECT_GT(n_avg, 100) << "plateau window too short";
+  if (t1 > 0 && t2 > 0) r.c_measured = (x2 - x1) / (t2 - t1);
+  if (n_avg > 0) {
+    r.v_measured = v_sum / n_avg;
+    r.sigma_plateau = s_sum / n_avg;
+  }
+  r.dt = sim.dt();
+  r.steps = sim.steps();
+  r.blocks = m.n_blocks();
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  std::printf("[p-wave alpha=%g] blocks %zu, dt %.4g s (%s), steps %lld, wall %.2f s\n"
+              "  c_measured %.2f m/s, c_eff predicted %.2f m/s (c_p %.2f), error %+.3f %%\n"
+              "  v_measured %.5f m/s, predicted %.5f m/s, error %+.3f %%; sigma_xx plateau %.5g Pa\n",
+              alpha, r.blocks, r.dt, sim.stable().limit.c_str(), static_cast<long long>(r.steps),
+              r.wall_s, r.c_measured, r.c_predicted, rock.cp(),
+              100 * (r.c_measured / r.c_predicted - 1), r.v_measured, r.v_predicted,
+              100 * (r.v_measured / r.v_predicted - 1), r.sigma_plateau);
+  return r;
+}
+
+const WaveResult& result(double alpha) {
+  static const WaveResult r10 = run_bar(10.0);
+  static const WaveResult r100 = run_bar(100.0);
+  return alpha == 10.0 ? r10 : r100;
+}
+
+// The wave speed matches the series-spring c_eff. Tolerance 1 %: the half-level arrival of the
+// linear ramp is a long-wave measure (the lattice dispersion shifts it only at second order in
+// h / ramp length = 1/20, ~0.3 %), and the sampling error is dt / (t2 - t1) < 0.1 %. The
+// brief allows "a few %"; 1 % is tighter than the 5 % (alpha 10) that c_p would be off by,
+// so the check does tell c_eff from c_p.
+TEST(PWaveBar, SpeedMatchesSeriesSpringAlpha10) {
+  const auto& r = result(10.0);
+  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.01);
+}
+
+TEST(PWaveBar, SpeedMatchesSeriesSpringAlpha100) {
+  const auto& r = result(100.0);
+  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.01);
+}
+
+// The alpha dependence: c(10) / c(100) against the formula. Systematic errors of the
+// measurement (dispersion, sampling) are nearly the same in both runs and cancel in the ratio;
+// the predicted ratio is 0.960, so a 0.5 % tolerance checks the 4 % effect of alpha to ~12 %.
+TEST(PWaveBar, SpeedRatioFollowsAlpha) {
+  const auto& a = result(10.0);
+  const auto& b = result(100.0);
+  const double measured = a.c_measured / b.c_measured;
+  const double predicted = a.c_predicted / b.c_predicted;
+  std::printf("[p-wave] c(10)/c(100): measured %.5f, predicted %.5f\n", measured, predicted);
+  EXPECT_NEAR(measured / predicted, 1.0, 0.005);
+}
+
+// Behind the front: sigma_xx = -p0 (traction continuity at the loaded end) and
+// v = p0 / (rho c_eff). Averaged over >= 0.6 ms of plateau, the lattice ringing (a few % peak,
+// oscillating) averages out to well below 1 %; tolerance 2 % ("a few %" of the brief).
+TEST(PWaveBar, PlateauStressAndParticleVelocity) {
+  for (double alpha : {10.0, 100.0}) {
+    const auto& r = result(alpha);
+    EXPECT_NEAR(r.sigma_plateau / -kP0, 1.0, 0.02) << "alpha " << alpha;
+    EXPECT_NEAR(r.v_measured / r.v_predicted, 1.0, 0.02) << "alpha " << alpha;
+  }
+}
+
+// Each run small and fast (the brief: < 5 s); a guard against an accidental blow-up of the
+// step count, not a performance benchmark.
+TEST(PWaveBar, RunsAreSmall) {
+  for (double alpha : {10.0, 100.0}) {
+    const auto& r = result(alpha);
+    EXPECT_LE(r.blocks, 5000u);
+    EXPECT_LT(r.steps, 20000);
+  }
+}
+
+}  // namespace
+}  // namespace cdem

@@ -28,6 +28,7 @@ try:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.lines import Line2D
     from matplotlib import colors as mcolors
@@ -42,7 +43,7 @@ DPI = 150
 MAX_FRAMES = 6
 RUN_STYLES = ["-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)), (0, (8, 2))]
 DAMAGE_CMAP = "YlOrRd"
-VM_CMAP = "viridis"
+VM_CMAP = "YlGnBu"
 CRACK_COLOR = "black"
 
 plt.rcParams.update({
@@ -392,6 +393,12 @@ def set_limits(ax, polys, xlabel, ylabel):
     ax.grid(False)
 
 
+def colorbar(fig, mappable, ax=None, shrink=0.9, extend="neither"):
+    """A slim colour bar next to the given axes (or axes list)."""
+    return fig.colorbar(mappable, ax=ax, shrink=shrink, extend=extend, fraction=0.05, aspect=25,
+                        pad=0.02)
+
+
 def draw_cracks(ax, segs, lw=0.5):
     if segs is not None and len(segs):
         ax.add_collection(LineCollection(segs, colors=CRACK_COLOR, linewidths=lw, alpha=0.9))
@@ -431,6 +438,17 @@ def model_centre_y(frame):
     return 0.5 * (frame.X[:, 1].min() + frame.X[:, 1].max())
 
 
+def figsize_for(ncols, nrows, aspect, aw, cbar_each, cbar_shared, title_lines=1):
+    """Figure size (in) giving axes of width aw and the view's aspect, with room for the
+    tick labels, titles and colour bars, so constrained_layout leaves little white space."""
+    ah = aw / aspect
+    if ah > 7.0:  # tall views: keep the figure on a screen
+        aw, ah = aw * 7.0 / ah, 7.0
+    w = ncols * (aw + 0.8 + (1.1 if cbar_each else 0.0)) + (1.2 if cbar_shared else 0.0)
+    h = nrows * (ah + 0.55 + 0.2 * title_lines) + 0.8
+    return w, h
+
+
 def grid_shape(n):
     ncols = 1 if n == 1 else 2 if n in (2, 4) else 3
     return math.ceil(n / ncols), ncols
@@ -451,12 +469,9 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
     y0 = model_centre_y(frames[-1])
     nrows, ncols = grid_shape(len(frames))
     aspect = panel_size(frames, y0)
-    pw = 4.0
-    ph = pw / aspect + 0.7
-    extra = 0.9 if quantity == "damage" else 0.0
-    fig, axes = plt.subplots(nrows, ncols, figsize=(pw * ncols + extra + (0.9 * ncols if quantity != "damage" else 0),
-                                                    ph * nrows + 0.5),
-                             squeeze=False, constrained_layout=True)
+    shared = quantity == "damage"
+    fig, axes = plt.subplots(nrows, ncols, squeeze=False, constrained_layout=True,
+                             figsize=figsize_for(ncols, nrows, aspect, 3.6, not shared, shared))
     mappable = None
     for k, ax in enumerate(axes.ravel()):
         if k >= len(frames):
@@ -479,7 +494,7 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
             ax.set_title(fmt_time(fr.time))
             continue
         m = draw_polys(ax, polys, vals, cmap, norm)
-        draw_cracks(ax, segs, lw=0.4)
+        draw_cracks(ax, segs, lw=0.3)
         set_limits(ax, polys, xl, yl)
         ax.set_title(fmt_time(fr.time))
         if k % ncols:
@@ -489,10 +504,10 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
         if quantity == "damage":
             mappable = m
         else:
-            cb = fig.colorbar(m, ax=ax, shrink=0.85, extend="max")
+            cb = colorbar(fig, m, ax=ax, shrink=0.85, extend="max")
             cb.set_label("von Mises (MPa)")
     if quantity == "damage" and mappable is not None:
-        cb = fig.colorbar(mappable, ax=axes.ravel().tolist(), shrink=0.8)
+        cb = colorbar(fig, mappable, ax=axes.ravel().tolist(), shrink=0.8)
         cb.set_label("damage (broken fraction of interface area)")
     where = "" if frames[-1].dim == 2 else f", vertical section y = {y0:.3g} m"
     what = "Damage" if quantity == "damage" else "von Mises stress"
@@ -512,8 +527,8 @@ def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
     own = ax is None
     if own:
         aspect = panel_size([frame], y0)
-        w = 8.0
-        fig, ax = plt.subplots(figsize=(w, min(w / aspect + 0.9, 10)), constrained_layout=True)
+        fig, ax = plt.subplots(figsize=figsize_for(1, 1, aspect, 6.5, True, False, 2),
+                               constrained_layout=True)
     vals = cell_values(frame, "damage")
     if vals is None or not polys:
         ax.text(0.5, 0.5, "no damage data", ha="center", va="center", transform=ax.transAxes)
@@ -529,7 +544,7 @@ def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
         ax.set_title(f"Damage at {fmt_time(frame.time)}{where}: {run.label}{magnify_note(frame)}\n"
                      f"black lines: cracks{fdt}")
         if m is not None:
-            cb = fig.colorbar(m, ax=ax, shrink=0.85)
+            cb = colorbar(fig, m, ax=ax, shrink=0.85)
             cb.set_label("damage (broken fraction of interface area)")
         return save(fig, out_dir, name, written)
     ax.set_title(f"{run.label}\n{fmt_time(frame.time)}{where}{fdt}")
@@ -546,23 +561,22 @@ def plot_3d_views(run, frame, out_dir, written):
         pts = verts.reshape(-1, 2)
         w, h = np.ptp(pts, axis=0)
         aspect = float(np.clip(w / h if h > 0 else 1, 0.3, 4))
-        fig, axes = plt.subplots(1, 2, figsize=(12, 6 / aspect + 1.2), constrained_layout=True)
+        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, aspect, 4.6, True, False),
+                                 constrained_layout=True)
         dmg = cell_values(frame, "damage")
         if dmg is not None:
             m = draw_polys(axes[0], polys, dmg, DAMAGE_CMAP, mcolors.Normalize(0, 1))
-            fig.colorbar(m, ax=axes[0], shrink=0.85).set_label("damage")
+            colorbar(fig, m, ax=axes[0], shrink=0.85).set_label("damage")
         set_limits(axes[0], polys, "x (m)", "y (m)")
         axes[0].set_title("Damage of the upward-facing surface")
         uzmm = uz * 1e3
-        lim = float(np.nanpercentile(np.abs(uzmm), 99.5)) or 1.0
-        vals = np.zeros(frame.grid.ncells)
+        lim = float(np.nanpercentile(np.abs(uzmm), 98)) or 1.0
         pc = PolyCollection(verts, array=uzmm, cmap="RdBu_r", norm=mcolors.Normalize(-lim, lim),
                             edgecolors="face", linewidths=0.15)
         axes[1].add_collection(pc)
-        fig.colorbar(pc, ax=axes[1], shrink=0.85, extend="both").set_label("vertical displacement u_z (mm)")
+        colorbar(fig, pc, ax=axes[1], shrink=0.85, extend="both").set_label("vertical displacement u_z (mm)")
         set_limits(axes[1], polys, "x (m)", "y (m)")
         axes[1].set_title("Vertical displacement u_z")
-        del vals
         fig.suptitle(f"Top view at {fmt_time(frame.time)}: {run.label}{magnify_note(frame)}")
         names.append(save(fig, out_dir, "top_view.png", written))
     y0 = model_centre_y(frame)
@@ -570,19 +584,20 @@ def plot_3d_views(run, frame, out_dir, written):
     if polys:
         segs = frame.crack_section(y0)
         aspect = panel_size([frame], y0)
-        fig, axes = plt.subplots(1, 2, figsize=(12, 6 / aspect + 1.2), constrained_layout=True)
+        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, aspect, 4.6, True, False),
+                                 constrained_layout=True)
         dmg = cell_values(frame, "damage")
         if dmg is not None:
             m = draw_polys(axes[0], polys, dmg, DAMAGE_CMAP, mcolors.Normalize(0, 1))
-            fig.colorbar(m, ax=axes[0], shrink=0.85).set_label("damage")
+            colorbar(fig, m, ax=axes[0], shrink=0.85).set_label("damage")
         draw_cracks(axes[0], segs, lw=0.5)
         set_limits(axes[0], polys, "x (m)", "z (m)")
         axes[0].set_title("Damage (black lines: cracks)")
         umag = node_magnitude_per_cell(frame) * 1e3
         vis = np.concatenate([umag[ids] for _, ids in polys])
-        top = float(np.nanpercentile(vis, 99.5)) or 1.0
+        top = float(np.nanpercentile(vis, 98)) or 1.0
         m = draw_polys(axes[1], polys, umag, "viridis", mcolors.Normalize(0, top))
-        fig.colorbar(m, ax=axes[1], shrink=0.85, extend="max").set_label("displacement magnitude |u| (mm)")
+        colorbar(fig, m, ax=axes[1], shrink=0.85, extend="max").set_label("displacement magnitude |u| (mm)")
         set_limits(axes[1], polys, "x (m)", "z (m)")
         axes[1].set_title("Displacement magnitude")
         fig.suptitle(f"Vertical section y = {y0:.3g} m at {fmt_time(frame.time)}: "
@@ -636,9 +651,13 @@ def plot_monitors(runs, out_dir, written):
     axes[0].set_xlim(0, tmax * tf)
 
     def mlabel(n):
-        p = runs_with[0].monitor_points.get(n)
-        if isinstance(p, list) and p:
-            return f"{n} ({', '.join(f'{c:g}' for c in p[:3])})"
+        for r in runs_with:
+            p = r.monitor_points.get(n)
+            if isinstance(p, list) and p and all(isinstance(c, (int, float)) for c in p):
+                p = p[:3]
+                if len(p) == 3 and p[2] == 0 and r.dim == 2:
+                    p = p[:2]
+                return f"{n} ({', '.join(f'{c:g}' for c in p)})"
         return n
 
     handles = [Line2D([], [], color=colors[i], lw=1.5, label=mlabel(n)) for i, n in enumerate(names)]
@@ -694,7 +713,7 @@ def plot_fracture(runs, out_dir, written):
         ax.set_xlabel(f"time ({tu})")
         ax.set_xlim(0, tmax * tf)
         ax.set_ylim(bottom=0)
-        ax.legend(loc="upper left", fontsize=8)
+        ax.legend(loc="best", fontsize=8)
     axes[0].set_ylabel("fracture degree (%)")
     fig.suptitle("Fracture degree (broken / total spring-point area)")
     return save(fig, out_dir, "fracture.png", written)
@@ -836,7 +855,8 @@ def plot_grading(runs, out_dir, written):
     for r in runs:
         if all(r is not rr for rr, _ in data):
             r.notes.append("No grading data (no grading curve or d10..d90 in summary.json, no "
-                           "grading.csv): grading.png skipped for this run.")
+                           "grading.csv): " + ("left out of grading.png." if len(runs) > 1
+                                               else "grading.png skipped."))
     if not data:
         return None
     fig, ax = plt.subplots(figsize=(8.5, 5.5), constrained_layout=True)
@@ -846,16 +866,19 @@ def plot_grading(runs, out_dir, written):
     for i, (r, (size, passing, src)) in enumerate(data):
         order = np.argsort(size, kind="stable")
         lab = r.label if len(data) > 1 else f"grading curve ({src})"
-        ax.plot(size[order], passing[order], color=colors[i], lw=1.8, marker="o", ms=3, label=lab)
+        ax.plot(size[order], passing[order], color=colors[i], lw=1.8, label=lab,
+                marker="o" if size.size <= 60 else None, ms=3)
         for key, pct, ls in (("d40_m", 40, "--"), ("d80_m", 80, ":")):
             v = r.summary.get(key)
             if isinstance(v, (int, float)) and math.isfinite(v) and v > 0:
                 ax.plot([v, v], [0, pct], color=colors[i], ls=ls, lw=1)
                 ax.plot([v], [pct], "o", color=colors[i], ms=6, mfc="white")
                 ax.annotate(f"{key[:3]} = {v:.3g} m", (v, pct), textcoords="offset points",
-                            xytext=(6, -12 if pct == 80 else 4), fontsize=8, color=colors[i])
+                            xytext=(7, -13), fontsize=9, color=colors[i],
+                            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
     if allsize.size and allsize.max() / allsize.min() > 20:
         ax.set_xscale("log")
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_ylim(0, 102)
     ax.set_xlabel("fragment size L_bc (m)")
     ax.set_ylabel("cumulative volume passing (%)")
@@ -866,37 +889,44 @@ def plot_grading(runs, out_dir, written):
 
 # ----------------------------------------------------------------------------- summary tables
 KNOWN = [
-    # key, label, unit, scale, format
+    # key, label, unit, scale, format. Rows appear in this order: run state, blasting
+    # quality, energy, model, performance; keys not listed follow (nested ones as "a: b").
     ("status", "status", "", None, None),
     ("diagnosis", "diagnosis", "", None, None),
     ("end_time", "simulated time", "ms", 1e3, "{:.4g}"),
+    ("fracture_degree", "fracture degree (area)", "%", 100, "{:.2f}"),
+    ("fracture_degree_tensile", "fracture degree, tensile", "%", 100, "{:.2f}"),
+    ("fracture_degree_shear", "fracture degree, shear", "%", 100, "{:.2f}"),
+    ("fracture_degree_count", "fracture degree (count)", "%", 100, "{:.2f}"),
+    ("fragments", "fragments", "", None, None),
+    ("d40_m", "d40 (40 % passing)", "m", 1, "{:.4g}"),
+    ("d80_m", "d80 (80 % passing)", "m", 1, "{:.4g}"),
+] + [(f"d{x}_m", f"d{x} ({x} % passing)", "m", 1, "{:.4g}") for x in (10, 20, 30, 50, 60, 70, 90)] + [
+    ("funnel_depth_m", "funnel depth", "m", 1, "{:.4g}"),
+    ("funnel_l_x_m", "funnel extent l_x", "m", 1, "{:.4g}"),
+    ("funnel_l_y_m", "funnel extent l_y", "m", 1, "{:.4g}"),
+    ("funnel_axial_ratio", "funnel axial ratio e = l_y / l_x", "", 1, "{:.3g}"),
+    ("funnel_footage_m", "footage", "m", 1, "{:.4g}"),
+    ("energy_error", "energy balance error (relative)", "", 1, "{:.2e}"),
+    ("kinetic_energy", "kinetic energy at the end", "J", 1, "{:.4g}"),
+    ("explosive_work", "explosive work", "J", 1, "{:.4g}"),
+    ("blocks", "blocks", "", None, None),
+    ("nodes", "nodes", "", None, None),
+    ("spring_points", "spring points", "", None, None),
+    ("bar_segments", "bar segments", "", None, None),
+    ("explosive_blocks", "explosive blocks", "", None, None),
+    ("collapsed_explosive_blocks", "collapsed explosive blocks", "", None, None),
     ("steps", "time steps", "", None, None),
     ("dt", "time step", "µs", 1e6, "{:.4g}"),
     ("dt_limit", "time step limited by", "", None, None),
     ("dt_blocks", "block limit of the time step", "µs", 1e6, "{:.4g}"),
     ("dt_springs", "spring limit of the time step", "µs", 1e6, "{:.4g}"),
-    ("blocks", "blocks", "", None, None),
-    ("nodes", "nodes", "", None, None),
-    ("spring_points", "spring points", "", None, None),
+    ("field_outputs", "field outputs", "", None, None),
     ("threads", "threads", "", None, None),
     ("wall_time_s", "wall time", "s", 1, "{:.3g}"),
     ("loop_time_s", "time-loop wall time", "s", 1, "{:.3g}"),
     ("block_steps_per_s", "throughput", "block-steps/s", 1, "{:.3g}"),
     ("spring_steps_per_s", "spring throughput", "spring-steps/s", 1, "{:.3g}"),
-    ("fracture_degree", "fracture degree (area)", "%", 100, "{:.2f}"),
-    ("fracture_degree_tensile", "fracture degree, tensile", "%", 100, "{:.2f}"),
-    ("fracture_degree_shear", "fracture degree, shear", "%", 100, "{:.2f}"),
-    ("fracture_degree_count", "fracture degree (count)", "%", 100, "{:.2f}"),
-    ("energy_error", "energy balance error (relative)", "", 1, "{:.2e}"),
-    ("kinetic_energy", "kinetic energy at the end", "J", 1, "{:.4g}"),
-    ("explosive_work", "explosive work", "J", 1, "{:.4g}"),
-    ("fragments", "fragments", "", None, None),
-    ("d40_m", "d40 (40 % passing)", "m", 1, "{:.4g}"),
-    ("d80_m", "d80 (80 % passing)", "m", 1, "{:.4g}"),
-    ("bar_segments", "bar segments", "", None, None),
-    ("explosive_blocks", "explosive blocks", "", None, None),
-    ("collapsed_explosive_blocks", "collapsed explosive blocks", "", None, None),
-    ("field_outputs", "field outputs", "", None, None),
 ]
 UNIT_SUFFIX = [("_m3", "m³"), ("_m", "m"), ("_s", "s"), ("_j", "J"), ("_pa", "Pa"), ("_kg", "kg")]
 
@@ -927,7 +957,7 @@ def describe(key):
         if key.lower().endswith(suf):
             lab, unit = key[: -len(suf)], u
             break
-    lab = lab.replace("_", " ")
+    lab = lab.replace(".", ": ").replace("_", " ")
     return lab, unit, 1, "{:.4g}"
 
 
@@ -957,6 +987,12 @@ def summary_rows(runs):
         for k in f:
             if k not in keys and k not in rest and k != "title":
                 rest.append(k)
+    quality = [k for k in rest if k.startswith(("funnel", "grading", "fragment"))]
+    rest = [k for k in rest if k not in quality]
+    known = [k for k, *_ in KNOWN]
+    last_quality = known.index("funnel_footage_m")
+    pos = sum(1 for k in keys if known.index(k) <= last_quality)
+    keys = keys[:pos] + quality + keys[pos:]
     rows = []
     for k in keys + rest:
         lab, unit, sc, fm = describe(k)
@@ -1002,7 +1038,7 @@ CAPTIONS = {
     "damage_final.png": "Damage at the last output time, with the cracks.",
     "top_view.png": "Top view (faces looking up): damage and vertical displacement.",
     "section.png": "Vertical section through the model centre: damage with crack traces, and "
-                   "displacement magnitude.",
+                   "displacement magnitude (colour scale clipped at its 98th percentile).",
     "damage_final_compare.png": "Damage at the last output time of each run, side by side.",
 }
 
@@ -1035,7 +1071,7 @@ def write_documents(runs, out_dir, pictures, notes):
     mrows = [list(r) if multi else list(r[1:]) for r in mrows]
     run_lines = []
     for r in runs:
-        rel = os.path.relpath(r.dir, out_dir)
+        rel = r.dir
         own = os.path.join(r.dir, "report", "index.html")
         run_lines.append((r.label, rel, os.path.relpath(own, out_dir) if multi and os.path.isfile(own) else None))
     warn = [f"{r.label}: status '{r.summary.get('status')}'"
@@ -1145,8 +1181,7 @@ def compare_damage(runs, out_dir, written, notes, args):
     ncols = min(n, 3)
     nrows = math.ceil(n / ncols)
     aspect = panel_size([frames[0][1]], model_centre_y(frames[0][1]))
-    pw = 5.0
-    fig, axes = plt.subplots(nrows, ncols, figsize=(pw * ncols + 1.0, (pw / aspect + 1.0) * nrows),
+    fig, axes = plt.subplots(nrows, ncols, figsize=figsize_for(ncols, nrows, aspect, 4.4, False, True, 3),
                              squeeze=False, constrained_layout=True)
     m = None
     for k, ax in enumerate(axes.ravel()):
@@ -1157,7 +1192,7 @@ def compare_damage(runs, out_dir, written, notes, args):
         mm = plot_damage_final(r, fr, out_dir, None, written, ax=ax, fig=fig)
         m = mm or m
     if m is not None:
-        fig.colorbar(m, ax=axes.ravel().tolist(), shrink=0.8).set_label(
+        colorbar(fig, m, ax=axes.ravel().tolist(), shrink=0.8).set_label(
             "damage (broken fraction of interface area)")
     fig.suptitle("Damage at the last output time (black lines: cracks)")
     return save(fig, out_dir, "damage_final_compare.png", written)
@@ -1191,14 +1226,18 @@ def main(argv=None):
     except VtuError as ex:
         print(f"cdem_report: {ex}", file=sys.stderr)
         return 2
-    # Unique labels.
-    seen = {}
+    # Unique labels: runs sharing a title are told apart by their directory names.
+    counts = {}
     for r in runs:
-        if r.label in seen:
+        counts[r.label] = counts.get(r.label, 0) + 1
+    for r in runs:
+        if counts[r.label] > 1:
             r.label = f"{r.label} [{os.path.basename(r.dir)}]"
+    seen = set()
+    for i, r in enumerate(runs):
         if r.label in seen:
-            r.label = f"{r.label} #{len(seen)}"
-        seen[r.label] = r
+            r.label = f"{r.label} #{i + 1}"
+        seen.add(r.label)
     multi = len(runs) > 1
     out_dir = args.out or os.path.join(runs[0].dir, "report_compare" if multi else "report")
     os.makedirs(out_dir, exist_ok=True)

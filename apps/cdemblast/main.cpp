@@ -7,10 +7,15 @@
 #include <omp.h>
 #include <spdlog/spdlog.h>
 
+#include <sys/wait.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
 #include "cdem/core/error.hpp"
+#include "cdem/explosive/charges.hpp"
+#include "cdem/analysis/monitors.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/solver/run.hpp"
 #include "cdem/solver/simulation.hpp"
@@ -22,6 +27,10 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   const cdem::Mesh mesh = cdem::load_mesh(c);
   cdem::Simulation sim(cdem::build_case_model(c, mesh), c);
   const auto& m = sim.model();
+  cdem::locate_monitors(m, c);
+  const cdem::BarCharges bars = cdem::build_bar_charges(m, c);
+  const cdem::SolidCharges solids = cdem::build_solid_charges(m, c);
+  if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
   const auto& st = sim.stable();
   fmt::print("case        {} ({})\n", c.title, path);
   fmt::print("dimension   {}D\n", m.dim);
@@ -33,11 +42,47 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   for (const auto& r : m.region_names) fmt::print(" {}", r);
   fmt::print("\nface sets  ");
   for (const auto& f : m.facet_sets) fmt::print(" {}({})", f.name, f.facets.size());
-  fmt::print("\ndt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",
+  fmt::print("\n");
+  fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",
              sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety);
+  for (const auto& b : bars.bars)
+    fmt::print("bar         hole '{}' deck {}: {:.4g} m, {} segments of {:.4g} m, starts at t = {:.4g} s\n",
+               b.hole, b.deck + 1, b.length, b.seg_end - b.seg_begin, b.h, b.t0);
+  if (!bars.empty()) fmt::print("bar blocks  {} loaded\n", bars.elem_block.size());
+  for (const auto& ch : solids.charges)
+    fmt::print("solid       hole '{}' deck {}\n", ch.hole, ch.deck + 1);
+  if (!solids.empty()) fmt::print("explosive   {} blocks\n", solids.block.size());
   fmt::print("steps       {} to reach {} s\n", static_cast<long long>(std::ceil(c.end_time / sim.dt())), c.end_time);
   fmt::print("check       OK\n");
   return 0;
+}
+
+// The report is drawn by scripts/cdem_report.py (matplotlib); this runs it with Debian's python.
+int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
+  namespace fs = std::filesystem;
+  const char* env = std::getenv("CDEM_REPORT_SCRIPT");
+  const std::string script = env ? env : (fs::path(CDEM_SOURCE_DIR) / "scripts" / "cdem_report.py").string();
+  if (!fs::exists(script)) {
+    fmt::print(stderr, "error: the report script '{}' is missing\n", script);
+    return 1;
+  }
+  for (const auto& r : runs)
+    if (!fs::exists(fs::path(r) / "summary.json")) {
+      fmt::print(stderr, "error: '{}' is not a finished run directory (no summary.json)\n", r);
+      return 2;
+    }
+  const char* py_env = std::getenv("CDEM_PYTHON");
+  const std::string py = py_env ? py_env : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+  auto quote = [](const std::string& s) {
+    std::string o = "'";
+    for (char ch : s) o += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return o + "'";
+  };
+  std::string cmd = quote(py) + " " + quote(script);
+  for (const auto& r : runs) cmd += " " + quote(r);
+  if (!out.empty()) cmd += " --out " + quote(out);
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : 1;
 }
 
 }  // namespace
@@ -63,6 +108,12 @@ int main(int argc, char** argv) {
   check->add_option("case", case_path, "Case file (TOML)")->required();
   check->add_option("--set", sets, "Override a case key");
 
+  std::vector<std::string> report_runs;
+  std::string report_out;
+  auto* report = app.add_subcommand("report", "Draw PNG plots, summary.md and index.html of finished runs");
+  report->add_option("runs", report_runs, "Run directories (several: overlaid for comparison)")->required();
+  report->add_option("--out,-o", report_out, "Output directory (default: RUN/report)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -71,6 +122,7 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   try {
     if (*check) return cmd_check(case_path, sets);
+    if (*report) return cmd_report(report_runs, report_out);
     const cdem::Case c = cdem::load_case(case_path, sets);
     if (out_dir.empty()) out_dir = (std::filesystem::path("runs") / std::filesystem::path(case_path).stem()).string();
     cdem::RunOptions opt;

@@ -1,7 +1,8 @@
 // Gmsh front end: reading (ASCII v4.1, v2.2, binary), the checks and their messages, writing
 // (round trip) and generation (areas and volumes, regions, face sets, quads, refinement).
-#include <gtest/gtest.h>
 #include <gmsh.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -9,7 +10,6 @@
 #include <numbers>
 #include <string>
 #include <thread>
-#include <unistd.h>
 #include <vector>
 
 #include "cdem/core/error.hpp"
@@ -20,7 +20,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string data(const std::string& name) { return std::string(CDEM_SOURCE_DIR) + "/tests/data/meshes/" + name; }
+std::string data(const std::string& name) {
+  return std::string(CDEM_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
 
 // A fresh scratch directory per test.
 fs::path scratch_dir() {
@@ -34,11 +36,16 @@ fs::path scratch_dir() {
 
 // Signed area (2D) or volume (3D) of element e.
 double measure(const Mesh& m, std::size_t e) {
-  auto x = [&](int k) { return m.vertices[static_cast<std::size_t>(m.elem_vertices[e][static_cast<std::size_t>(k)])]; };
+  auto x = [&](int k) {
+    return m.vertices[static_cast<std::size_t>(m.elem_vertices[e][static_cast<std::size_t>(k)])];
+  };
   switch (m.elem_type[e]) {
-    case ElemType::Tri3: return 0.5 * cross(x(1) - x(0), x(2) - x(0)).z;
-    case ElemType::Quad4: return 0.5 * cross(x(2) - x(0), x(3) - x(1)).z;
-    case ElemType::Tet4: return dot(x(1) - x(0), cross(x(2) - x(0), x(3) - x(0))) / 6.0;
+    case ElemType::Tri3:
+      return 0.5 * cross(x(1) - x(0), x(2) - x(0)).z;
+    case ElemType::Quad4:
+      return 0.5 * cross(x(2) - x(0), x(3) - x(1)).z;
+    case ElemType::Tet4:
+      return dot(x(1) - x(0), cross(x(2) - x(0), x(3) - x(0))) / 6.0;
   }
   return 0;
 }
@@ -53,7 +60,8 @@ double total_measure(const Mesh& m, int region = -1) {
 Vec3 centroid(const Mesh& m, std::size_t e) {
   Vec3 c;
   const int n = nodes_of(m.elem_type[e]);
-  for (int k = 0; k < n; ++k) c += m.vertices[static_cast<std::size_t>(m.elem_vertices[e][static_cast<std::size_t>(k)])];
+  for (int k = 0; k < n; ++k)
+    c += m.vertices[static_cast<std::size_t>(m.elem_vertices[e][static_cast<std::size_t>(k)])];
   return c / n;
 }
 
@@ -69,14 +77,16 @@ std::string mesh_error_of(F&& f) {
 }
 
 void expect_all_positive(const Mesh& m) {
-  for (std::size_t e = 0; e < m.num_elements(); ++e) ASSERT_GT(measure(m, e), 0.0) << "element " << e;
+  for (std::size_t e = 0; e < m.num_elements(); ++e)
+    ASSERT_GT(measure(m, e), 0.0) << "element " << e;
 }
 
 void expect_same_mesh(const Mesh& a, const Mesh& b) {
   ASSERT_EQ(a.dim, b.dim);
   ASSERT_EQ(a.vertices.size(), b.vertices.size());
   for (std::size_t i = 0; i < a.vertices.size(); ++i)
-    for (int k = 0; k < 3; ++k) ASSERT_NEAR(a.vertices[i][k], b.vertices[i][k], 1e-14) << "vertex " << i;
+    for (int k = 0; k < 3; ++k)
+      ASSERT_NEAR(a.vertices[i][k], b.vertices[i][k], 1e-14) << "vertex " << i;
   ASSERT_EQ(a.elem_type, b.elem_type);
   ASSERT_EQ(a.elem_vertices, b.elem_vertices);
   ASSERT_EQ(a.elem_region, b.elem_region);
@@ -249,7 +259,8 @@ TEST(GmshSession, ConcurrentReads) {
   std::vector<std::thread> threads;
   for (std::size_t t = 0; t < 2; ++t)
     threads.emplace_back([&counts, t] {
-      for (int i = 0; i < 3; ++i) counts[t] += read_gmsh(data(t == 0 ? "mixed_v41.msh" : "tets_v22.msh")).num_elements();
+      for (int i = 0; i < 3; ++i)
+        counts[t] += read_gmsh(data(t == 0 ? "mixed_v41.msh" : "tets_v22.msh")).num_elements();
     });
   for (auto& th : threads) th.join();
   EXPECT_EQ(counts[0], 9u);
@@ -334,9 +345,13 @@ TEST(GmshGenerate, RectangleWithCircularHole) {
       EXPECT_FALSE(m.face_set(name)->facets.empty()) << name;
     }
     for (const Facet& f : m.face_set("hole0")->facets)
-      for (int k = 0; k < 2; ++k) EXPECT_NEAR(norm(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])]), 0.2, 1e-9);
+      for (int k = 0; k < 2; ++k)
+        EXPECT_NEAR(norm(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])]),
+                    0.2, 1e-9);
     for (const Facet& f : m.face_set("top")->facets)
-      for (int k = 0; k < 2; ++k) EXPECT_NEAR(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])].y, 0.5, 1e-12);
+      for (int k = 0; k < 2; ++k)
+        EXPECT_NEAR(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])].y, 0.5,
+                    1e-12);
     std::size_t nq = 0;
     for (ElemType t : m.elem_type) nq += t == ElemType::Quad4;
     if (quads)
@@ -373,11 +388,13 @@ TEST(GmshGenerate, PlateWithChargedSlotOfCase51) {
   ASSERT_NE(wall, nullptr);
   double wall_length = 0;
   for (const Facet& f : wall->facets)
-    wall_length += norm(m.vertices[static_cast<std::size_t>(f.v[1])] - m.vertices[static_cast<std::size_t>(f.v[0])]);
+    wall_length += norm(m.vertices[static_cast<std::size_t>(f.v[1])] -
+                        m.vertices[static_cast<std::size_t>(f.v[0])]);
   EXPECT_NEAR(wall_length, 0.5 + 0.5 + 0.1, 1e-9);
   double top_length = 0;
   for (const Facet& f : m.face_set("top")->facets)
-    top_length += norm(m.vertices[static_cast<std::size_t>(f.v[1])] - m.vertices[static_cast<std::size_t>(f.v[0])]);
+    top_length += norm(m.vertices[static_cast<std::size_t>(f.v[1])] -
+                       m.vertices[static_cast<std::size_t>(f.v[0])]);
   EXPECT_NEAR(top_length, 4.0, 1e-9);
 }
 
@@ -396,7 +413,9 @@ TEST(GmshGenerate, Box) {
     EXPECT_FALSE(m.face_set(name)->facets.empty()) << name;
   }
   for (const Facet& f : m.face_set("back")->facets)
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])].y, 2.6, 1e-12);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(m.vertices[static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)])].y, 2.6,
+                  1e-12);
 }
 
 TEST(GmshGenerate, CylinderWithRingAndHole) {
@@ -418,7 +437,8 @@ TEST(GmshGenerate, CylinderWithRingAndHole) {
   EXPECT_NEAR(total_measure(m), v_total, 0.01 * v_total);
   EXPECT_NEAR(total_measure(m, m.region_index("ring")), v_ring, 0.01 * v_ring);
   expect_all_positive(m);
-  for (const char* name : {"side", "bottom", "top", "hole0"}) ASSERT_NE(m.face_set(name), nullptr) << name;
+  for (const char* name : {"side", "bottom", "top", "hole0"})
+    ASSERT_NE(m.face_set(name), nullptr) << name;
   for (std::size_t e = 0; e < m.num_elements(); ++e) {
     const Vec3 c = centroid(m, e);
     const bool in_ring = m.elem_region[e] == m.region_index("ring");
@@ -491,7 +511,8 @@ TEST(GmshGenerate, BadSpecsAreMeshErrors) {
   s.shape = "sphere";
   s.size = {1, 1, 1};
   s.element_size = 0.1;
-  EXPECT_NE(mesh_error_of([&] { generate_mesh(s); }).find("unknown shape 'sphere'"), std::string::npos);
+  EXPECT_NE(mesh_error_of([&] { generate_mesh(s); }).find("unknown shape 'sphere'"),
+            std::string::npos);
   s.shape = "rectangle";
   s.element_size = 0;
   EXPECT_NE(mesh_error_of([&] { generate_mesh(s); }).find("element_size"), std::string::npos);

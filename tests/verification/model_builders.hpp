@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <omp.h>
 #include <string>
 #include <utility>
 #include <vector>
@@ -240,6 +241,21 @@ inline Case make_case(const std::vector<BlockMaterial>& mats,
   c.interfaces = ifaces;
   return c;
 }
+
+// Runs the enclosed code with `n` OpenMP threads and restores the previous setting. The kernel-
+// level tests call the parallel kernels tens of thousands of times on a handful of elements;
+// with one thread they do not depend on how busy the (shared) machine is. Thread independence
+// itself is checked by test_determinism.cpp.
+class ScopedThreads {
+ public:
+  explicit ScopedThreads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~ScopedThreads() { omp_set_num_threads(saved_); }
+  ScopedThreads(const ScopedThreads&) = delete;
+  ScopedThreads& operator=(const ScopedThreads&) = delete;
+
+ private:
+  int saved_;
+};
 
 // ---------------------------------------------------------------------------------------------
 // Kinematics and tensors

@@ -308,6 +308,7 @@ Vec3 drive(TwoBody& tb, Vec3 u, Vec3& u_prev, double t) {
 }
 
 TEST(Interfaces, MohrCoulombTwoBlocks) {
+  ScopedThreads one(1);
   const double ft = 5e6, c = 15e6, phi = 30, sn = 10e6;
   for (int dim : {2, 3}) {
     // Tension: pull the upper body up until the interface breaks.
@@ -328,7 +329,9 @@ TEST(Interfaces, MohrCoulombTwoBlocks) {
         if (nb > 0) {
           broken_at = k;
           EXPECT_EQ(nb, static_cast<int>(tb.springs.size()));  // uniform: all break together
-          EXPECT_EQ(tension, 0.0);
+          // Round-off: the shear increment k_s (du - (du.n) n) of a purely normal du with n
+          // normalised from face area vectors is ~1e-16 of the step force.
+          EXPECT_LT(std::abs(tension), 1e-12 * ft * tb.area);
         } else {
           peak = std::max(peak, tension);
         }
@@ -386,6 +389,7 @@ TEST(Interfaces, MohrCoulombTwoBlocks) {
 // and the sum of sp_dissipated both equal G A at complete separation (opening) or complete
 // loss of cohesion (sliding). 2 % tolerance: see FractureEnergyOpeningDissipatesGt.
 TEST(Interfaces, FractureEnergyTwoBlocks) {
+  ScopedThreads one(1);
   const double ft = 5e6, c = 15e6, gt = 70, gs = 700;
   auto im = interface_of(InterfaceLaw::FractureEnergy, ft, c, 35);
   im.gt = gt;

@@ -96,10 +96,10 @@ struct WaveResult {
 
 WaveResult run_bar(double alpha) {
   const auto wall0 = std::chrono::steady_clock::now();
-  // h = 1 cm, 3 m long (300 cells), 2 rows: 600 blocks.
-  const int nx = 300, ny = 2;
+  // h = 1 cm, 2 m long (200 cells), 2 rows: 400 blocks.
+  const int nx = 200, ny = 2;
   const double h = 0.01, length = nx * h;
-  const double x1 = 0.755, x2 = 2.255;  // block centres (column 75 and 225)
+  const double x1 = 0.505, x2 = 1.505;  // block centres (columns 50 and 150)
 
   BlockMaterial rock;
   rock.name = "rock";
@@ -122,9 +122,11 @@ WaveResult run_bar(double alpha) {
   r.c_predicted = std::sqrt(m_cell / kRho);
   r.v_predicted = kP0 / (kRho * r.c_predicted);
 
-  // Ramp over 20 cell transits: smooth enough that the lattice ringing behind the front stays
-  // small, short (0.09 ms) compared with the 0.68 ms between the two monitors.
-  const double t_ramp = 20 * h / rock.cp();
+  // Ramp over 40 cell transits (0.18 ms, 0.4 m of bar): long enough that the lattice
+  // dispersion hardly moves the half level (measured: the speed error is +0.33 % with a 20-cell
+  // ramp, within 0.1 % with 40 cells, i.e. second order in h / ramp length), short compared
+  // with the 0.46 ms the front takes from x1 to x2.
+  const double t_ramp = 40 * h / rock.cp();
   Case c;
   c.path = "test_waves (in-code case)";
   c.title = "p_wave_bar";
@@ -151,10 +153,10 @@ WaveResult run_bar(double alpha) {
   EXPECT_GE(b2, 0);
   if (b1 < 0 || b2 < 0) return r;
 
-  // Simulated time: until the front (at c_p, an upper bound of c_eff) plus its ramp has passed
-  // x2 by a margin; the reflection from the free right end comes back to x2 at
-  // (2 L - x2) / c_eff = 1.7 ms, after the end (1.3 ms).
-  const double t_end = 1.3e-3;
+  // Simulated time: the half level reaches x2 at ~0.82 ms (x2 / c_eff + t_ramp / 2); the
+  // reflection from the free right end comes back to x2 at (2 L - x2) / c, >= 1.14 ms even at
+  // c_p (an upper bound of c_eff), after the end (1.0 ms).
+  const double t_end = 1.0e-3;
   EXPECT_LT(t_end, (2 * length - x2) / rock.cp());
   double t1 = -1, t2 = -1, prev1 = 0, prev2 = 0, prev_t = 0;
   double v_sum = 0, s_sum = 0;
@@ -167,9 +169,10 @@ WaveResult run_bar(double alpha) {
       t1 = prev_t + (t_state - prev_t) * (0.5 * kP0 - prev1) / (s1 - prev1);
     if (t2 < 0 && s2 >= 0.5 * kP0 && t_state > 0)
       t2 = prev_t + (t_state - prev_t) * (0.5 * kP0 - prev2) / (s2 - prev2);
-    // Plateau at x1: from 0.3 ms after the arrival (ramp 0.09 ms plus the front's spread) to the
-    // end, before any reflection can come back to x1.
-    if (t1 > 0 && t_state > t1 + 0.3e-3) {
+    // Plateau at x1: from 0.2 ms after the half-level arrival (the rest of the ramp, 0.09 ms,
+    // plus the front's spread) to the end (~0.47 ms of plateau); the reflection reaches x1 only
+    // at (2 L - x1) / c >= 1.6 ms.
+    if (t1 > 0 && t_state > t1 + 0.2e-3) {
       v_sum += sample_block(m, b1).velocity.x;
       s_sum += m.stress[b1][0];
       ++n_avg;
@@ -206,24 +209,26 @@ const WaveResult& result(double alpha) {
   return alpha == 10.0 ? r10 : r100;
 }
 
-// The wave speed matches the series-spring c_eff. Tolerance 1 %: the half-level arrival of the
-// linear ramp is a long-wave measure (the lattice dispersion shifts it only at second order in
-// h / ramp length = 1/20, ~0.3 %), and the sampling error is dt / (t2 - t1) < 0.1 %. The
-// brief allows "a few %"; 1 % is tighter than the 5 % (alpha 10) that c_p would be off by,
-// so the check does tell c_eff from c_p.
+// The wave speed matches the series-spring c_eff. Tolerance 0.5 %: the half-level arrival of
+// the linear ramp is a long-wave measure; the lattice dispersion moves it by a second-order
+// amount in h / ramp length (measured -0.1 % with this 40-cell ramp, +0.33 % with a 20-cell
+// one), and the sampling error is below dt / (t2 - t1) = 0.04 %. 0.5 % is tighter than the
+// brief's "a few %" and than the gap between c_eff and c_p (5.8 % at alpha = 10, 0.63 % at
+// alpha = 100), so the check does tell c_eff from c_p.
 TEST(PWaveBar, SpeedMatchesSeriesSpringAlpha10) {
   const auto& r = result(10.0);
-  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.01);
+  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.005);
 }
 
 TEST(PWaveBar, SpeedMatchesSeriesSpringAlpha100) {
   const auto& r = result(100.0);
-  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.01);
+  EXPECT_NEAR(r.c_measured / r.c_predicted, 1.0, 0.005);
 }
 
-// The alpha dependence: c(10) / c(100) against the formula. Systematic errors of the
-// measurement (dispersion, sampling) are nearly the same in both runs and cancel in the ratio;
-// the predicted ratio is 0.960, so a 0.5 % tolerance checks the 4 % effect of alpha to ~12 %.
+// The alpha dependence: c(10) / c(100) against the formula (0.948). The measurement's own
+// systematic error (dispersion of the same ramp on the same lattice) is nearly the same in
+// both runs and cancels in the ratio; 0.5 % (the brief asks ~1 %) checks the 5.2 % effect of
+// alpha to better than a tenth of itself.
 TEST(PWaveBar, SpeedRatioFollowsAlpha) {
   const auto& a = result(10.0);
   const auto& b = result(100.0);
@@ -234,23 +239,26 @@ TEST(PWaveBar, SpeedRatioFollowsAlpha) {
 }
 
 // Behind the front: sigma_xx = -p0 (traction continuity at the loaded end) and
-// v = p0 / (rho c_eff). Averaged over >= 0.6 ms of plateau, the lattice ringing (a few % peak,
-// oscillating) averages out to well below 1 %; tolerance 2 % ("a few %" of the brief).
+// v = p0 / (rho c_eff) (momentum balance across the front). Both are exact for the discrete
+// bar once the front has passed; the lattice ringing behind the ramp is small and oscillates
+// about the plateau, so the ~0.5 ms average is within 0.01 % (measured). Tolerance 0.5 %: well
+// above that, and below the 5.8 % by which rho c_p would miss v at alpha = 10.
 TEST(PWaveBar, PlateauStressAndParticleVelocity) {
   for (double alpha : {10.0, 100.0}) {
     const auto& r = result(alpha);
-    EXPECT_NEAR(r.sigma_plateau / -kP0, 1.0, 0.02) << "alpha " << alpha;
-    EXPECT_NEAR(r.v_measured / r.v_predicted, 1.0, 0.02) << "alpha " << alpha;
+    EXPECT_NEAR(r.sigma_plateau / -kP0, 1.0, 0.005) << "alpha " << alpha;
+    EXPECT_NEAR(r.v_measured / r.v_predicted, 1.0, 0.005) << "alpha " << alpha;
   }
 }
 
-// Each run small and fast (the brief: < 5 s); a guard against an accidental blow-up of the
-// step count, not a performance benchmark.
+// Each run small and fast (the brief: a few thousand blocks at most, < 5 s): a guard against an
+// accidental growth of the model or of the step count (about 1600 and 4900 steps here), not a
+// timing benchmark (the wall time depends on the machine's load and is only printed).
 TEST(PWaveBar, RunsAreSmall) {
   for (double alpha : {10.0, 100.0}) {
     const auto& r = result(alpha);
     EXPECT_LE(r.blocks, 5000u);
-    EXPECT_LT(r.steps, 20000);
+    EXPECT_LT(r.steps, 10000);
   }
 }
 

@@ -259,7 +259,7 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   c.dir = fs::absolute(path).parent_path().string();
   const TomlTable top(root, path, "");
   top.check_known({"title", "mesh", "simulation", "material", "interface", "boundary",
-                   "damping_zone", "monitor", "initial_stress", "explosive", "hole"});
+                   "damping_zone", "monitor", "initial_stress", "explosive", "hole", "analysis"});
   c.title = top.string("title", fs::path(path).stem().string());
 
   // ---- mesh ----
@@ -422,6 +422,20 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     c.initial_stress.reference_level = is->number("reference_level", 0.0);
   }
   parse_explosives_and_holes(top, c);
+  if (const auto an = top.sub("analysis")) {
+    an->check_known({"up", "surface_level", "damage_threshold", "main_faces"});
+    c.analysis.up = an->vec("up", {});
+    if (an->has("up") && norm(c.analysis.up) == 0)
+      throw InputError(fmt::format("{}: a zero vector", an->where("up")));
+    if (an->has("surface_level")) {
+      c.analysis.surface_level = an->number("surface_level");
+      c.analysis.surface_level_set = true;
+    }
+    c.analysis.damage_threshold = an->positive("damage_threshold", 1.0);
+    if (c.analysis.damage_threshold > 1.0)
+      throw InputError(fmt::format("{}: expected a value in (0, 1]", an->where("damage_threshold")));
+    if (an->has("main_faces")) c.analysis.main_faces = an->strings("main_faces");
+  }
   // Materials that name an explosive must name a known one; their density defaults to it.
   for (auto& m : c.materials)
     if (!m.explosive.empty() && !c.explosive(m.explosive))
@@ -546,6 +560,14 @@ std::string resolved_case_toml(const Case& c) {
                                      q(d.explosive), d.length, d.delay, q(d.initiate_top ? "top" : "bottom")));
     std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     for (const auto& it : items) o += it.second;
+  }
+  o += fmt::format("\n[analysis]\nup = {}\ndamage_threshold = {:.17g}\n", vec_str(c.analysis.up),
+                   c.analysis.damage_threshold);
+  if (c.analysis.surface_level_set) o += fmt::format("surface_level = {:.17g}\n", c.analysis.surface_level);
+  if (!c.analysis.main_faces.empty()) {
+    o += "main_faces = [";
+    for (std::size_t i = 0; i < c.analysis.main_faces.size(); ++i) o += (i ? ", " : "") + q(c.analysis.main_faces[i]);
+    o += "]\n";
   }
   if (c.initial_stress.enabled)
     o += fmt::format("\n[initial_stress]\nstress = {}\ngradient = {}\nreference_level = {:.17g}\n",

@@ -87,6 +87,16 @@ struct HoleDef {
   double length() const { return norm(collar - end); }
 };
 
+// How the blasting funnel is measured (SPEC 4, docs/theory_fragments.md).
+struct AnalysisSettings {
+  Vec3 up{};                    // free-surface normal, out of the rock; zero: +y (2D) / +z (3D)
+  double surface_level = 0;     // along `up`; used when surface_level_set
+  bool surface_level_set = false;  // default: the model's highest point along `up`
+  double damage_threshold = 1.0;   // a block counts as broken at this damage (or detached)
+  std::vector<std::string> main_faces;  // face sets whose blocks anchor the main rock mass
+                                        // (default: the face sets with fixed boundaries)
+};
+
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
   std::string dir;          // its directory
@@ -117,7 +127,7 @@ struct Case {
   InitialStress initial_stress;
   std::vector<ExplosiveDef> explosives;  // built-ins used by the case, then [[explosive]]
   std::vector<HoleDef> holes;
-  double charge_history_interval = 0;    // charges.csv sampling (default: history_interval)
+  AnalysisSettings analysis;
 
   const ExplosiveDef* explosive(const std::string& name) const {
     for (const auto& e : explosives)

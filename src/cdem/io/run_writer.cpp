@@ -7,6 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "cdem/analysis/blast_quality.hpp"
 #include "cdem/analysis/damage.hpp"
 #include "cdem/analysis/monitors.hpp"
 
@@ -46,6 +47,7 @@ void write_json(const std::string& path, const std::vector<std::pair<std::string
 RunWriter::RunWriter(const std::string& dir, const Case& c) : dir_(dir), case_(c) {
   fs::create_directories(fs::path(dir) / "fields");
   fs::create_directories(fs::path(dir) / "cracks");
+  fs::create_directories(fs::path(dir) / "fragments");
   {
     std::ofstream o(fs::path(dir) / "case.resolved.toml");
     if (!o) throw std::runtime_error(fmt::format("cannot write into '{}'", dir));
@@ -105,8 +107,23 @@ void RunWriter::write_fields(const Model& m, double t) {
     vmis.f64.push_back(von_mises(s));
     reg.i32.push_back(m.block_region[b]);
   }
+  const FragmentResult frag = model_fragments(m);
+  VtuArray fid{"fragment_id", 1, {}, frag.fragment_of_block};
   vm.cell_data = {std::move(stress), std::move(pres), std::move(vmis), std::move(dmg),
-                  std::move(dmode), std::move(reg), std::move(jr)};
+                  std::move(dmode), std::move(reg), std::move(jr), std::move(fid)};
+  {
+    // One row per fragment (ids by decreasing volume: 0 is the largest).
+    const std::string path = (fs::path(dir_) / "fragments" / ("fragments_" + name + ".csv")).string();
+    std::FILE* f = open_csv(path, "id,blocks,volume,l_max,l_bc,cx,cy,cz,vx,vy,vz\n");
+    for (std::size_t k = 0; k < frag.fragments.size(); ++k) {
+      const auto& fr = frag.fragments[k];
+      if (fr.volume <= 0) continue;
+      std::fprintf(f, "%zu,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", k, fr.blocks, fr.volume,
+                   fr.l_max, fr.l_bc, fr.centroid.x, fr.centroid.y, fr.centroid.z, fr.velocity.x,
+                   fr.velocity.y, fr.velocity.z);
+    }
+    std::fclose(f);
+  }
   const std::string rel = "fields/fields_" + name + ".vtu";
   write_vtu((fs::path(dir_) / rel).string(), vm);
   fields_pvd_->add(t, rel);

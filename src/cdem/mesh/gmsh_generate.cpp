@@ -4,6 +4,7 @@
 // and the ring, so the mesh is conformal across their walls), meshed with a size field,
 // labelled with physical groups, and turned into a Mesh by the same extraction (and checks)
 // as read_gmsh.
+#include <fmt/format.h>
 #include <gmsh.h>
 
 #include <algorithm>
@@ -13,8 +14,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
@@ -35,17 +34,19 @@ struct Side {
 
 struct Body {
   int dim = 2;
-  double extent = 0;  // largest side (m)
+  double extent = 0;   // largest side (m)
   double measure = 0;  // area (m^2) or volume (m^3)
-  Vec3 lo, hi;        // bounding box
+  Vec3 lo, hi;         // bounding box
 };
 
 Body check_spec(const GenerateSpec& s) {
   Body b;
-  if (!(s.element_size > 0)) spec_error(fmt::format("element_size must be > 0 (got {})", s.element_size));
+  if (!(s.element_size > 0))
+    spec_error(fmt::format("element_size must be > 0 (got {})", s.element_size));
   const Vec3 o = s.origin, z = s.size;
   if (s.shape == "rectangle") {
-    if (!(z.x > 0 && z.y > 0)) spec_error(fmt::format("rectangle size must be > 0 in x and y (got {}, {})", z.x, z.y));
+    if (!(z.x > 0 && z.y > 0))
+      spec_error(fmt::format("rectangle size must be > 0 in x and y (got {}, {})", z.x, z.y));
     b.dim = 2;
     b.lo = {o.x, o.y, 0};
     b.hi = {o.x + z.x, o.y + z.y, 0};
@@ -59,7 +60,8 @@ Body check_spec(const GenerateSpec& s) {
     b.measure = z.x * z.y * z.z;
   } else if (s.shape == "cylinder") {
     if (!(z.x > 0 && z.z > 0))
-      spec_error(fmt::format("cylinder radius (size.x) and height (size.z) must be > 0 (got {}, {})", z.x, z.z));
+      spec_error(fmt::format(
+          "cylinder radius (size.x) and height (size.z) must be > 0 (got {}, {})", z.x, z.z));
     b.dim = 3;
     b.lo = {o.x - z.x, o.y - z.x, o.z};
     b.hi = {o.x + z.x, o.y + z.x, o.z + z.z};
@@ -73,13 +75,15 @@ Body check_spec(const GenerateSpec& s) {
   // A guard against typing mistakes: the global size alone must not ask for a huge mesh.
   const double estimate = b.measure / std::pow(s.element_size, b.dim) * (b.dim == 2 ? 2.3 : 6.0);
   if (estimate > 5e7)
-    spec_error(fmt::format("element_size {} m would give about {:.0f} elements; use a larger size", s.element_size,
-                           estimate));
+    spec_error(fmt::format("element_size {} m would give about {:.0f} elements; use a larger size",
+                           s.element_size, estimate));
 
   for (std::size_t i = 0; i < s.holes.size(); ++i) {
     const HoleSpec& h = s.holes[i];
-    if (!(h.radius > 0)) spec_error(fmt::format("hole {}: radius must be > 0 (got {})", i, h.radius));
-    if (!(h.depth >= 0)) spec_error(fmt::format("hole {}: depth must be >= 0 (got {})", i, h.depth));
+    if (!(h.radius > 0))
+      spec_error(fmt::format("hole {}: radius must be > 0 (got {})", i, h.radius));
+    if (!(h.depth >= 0))
+      spec_error(fmt::format("hole {}: depth must be >= 0 (got {})", i, h.depth));
     if (!(norm(h.axis) > 0)) spec_error(fmt::format("hole {}: axis must not be zero", i));
     if (b.dim == 2 && h.depth > 0 && !(std::hypot(h.axis.x, h.axis.y) > 1e-9 * norm(h.axis)))
       spec_error(fmt::format("hole {}: a 2D slot (depth > 0) needs an axis in the xy plane", i));
@@ -91,12 +95,14 @@ Body check_spec(const GenerateSpec& s) {
   for (std::size_t i = 0; i < s.refine.size(); ++i) {
     const RefineSpec& r = s.refine[i];
     if (!(r.size > 0 && r.radius > 0))
-      spec_error(fmt::format("refinement {}: size and radius must be > 0 (got {}, {})", i, r.size, r.radius));
+      spec_error(fmt::format("refinement {}: size and radius must be > 0 (got {}, {})", i, r.size,
+                             r.radius));
   }
   if (s.ring_width != 0) {
     if (s.shape != "cylinder") spec_error("ring_width is for the cylinder only");
     if (!(s.ring_width > 0 && s.ring_width < s.size.x))
-      spec_error(fmt::format("ring_width must be > 0 and below the radius {} (got {})", s.size.x, s.ring_width));
+      spec_error(fmt::format("ring_width must be > 0 and below the radius {} (got {})", s.size.x,
+                             s.ring_width));
     if (!(s.ring_element_size >= 0)) spec_error("ring_element_size must be >= 0 (0: element_size)");
   }
   return b;
@@ -148,7 +154,9 @@ std::vector<Side> outer_sides(const GenerateSpec& s, const Body& b, double tol) 
   if (s.shape == "cylinder") {
     const Vec3 o = s.origin;
     const double radius = s.size.x;
-    sides.push_back({"side", [=](const Vec3& p) { return std::abs(std::hypot(p.x - o.x, p.y - o.y) - radius) < tol; }});
+    sides.push_back({"side", [=](const Vec3& p) {
+                       return std::abs(std::hypot(p.x - o.x, p.y - o.y) - radius) < tol;
+                     }});
     sides.push_back({"bottom", [=](const Vec3& p) { return std::abs(p.z - lo.z) < tol; }});
     sides.push_back({"top", [=](const Vec3& p) { return std::abs(p.z - hi.z) < tol; }});
     return sides;
@@ -178,8 +186,8 @@ std::pair<int, int> make_hole_tool(const HoleFrame& f, const Body& b) {
     // collar along the axis for the depth (no rounded bottom: in plane strain the hole is a
     // slot through the thickness, and a flat bottom keeps the charge region a clean block of
     // quadrilaterals). Corners computed directly so that axis-aligned slots are exact.
-    const Vec3 c0 = f.c - f.r * f.n, c1 = f.c + f.depth * f.a - f.r * f.n, c2 = f.c + f.depth * f.a + f.r * f.n,
-               c3 = f.c + f.r * f.n;
+    const Vec3 c0 = f.c - f.r * f.n, c1 = f.c + f.depth * f.a - f.r * f.n,
+               c2 = f.c + f.depth * f.a + f.r * f.n, c3 = f.c + f.r * f.n;
     std::vector<int> pts, lines;
     for (const Vec3& p : {c0, c1, c2, c3}) pts.push_back(occ::addPoint(p.x, p.y, 0));
     for (std::size_t i = 0; i < 4; ++i) lines.push_back(occ::addLine(pts[i], pts[(i + 1) % 4]));
@@ -257,7 +265,8 @@ Mesh generate_mesh(const GenerateSpec& spec) {
       if (spec.holes[i].region.empty()) continue;
       const gmsh::vectorpair part = clip_to_body(solid, make_hole_tool(frames[i], body));
       if (part.empty())
-        spec_error(fmt::format("hole {} (region '{}') lies outside the body", i, spec.holes[i].region));
+        spec_error(
+            fmt::format("hole {} (region '{}') lies outside the body", i, spec.holes[i].region));
       for (const auto& dt : part) {
         tools.push_back(dt);
         owner.push_back(static_cast<int>(i));
@@ -311,7 +320,8 @@ Mesh generate_mesh(const GenerateSpec& spec) {
       // field) right on the ring's inner wall makes the 1D meshing integrate the size field
       // at its discontinuity and take seconds.
       const int axis_dist = field::add("MathEval");
-      field::setString(axis_dist, "F", fmt::format("Sqrt((x-({}))^2+(y-({}))^2)", num(o.x), num(o.y)));
+      field::setString(axis_dist, "F",
+                       fmt::format("Sqrt((x-({}))^2+(y-({}))^2)", num(o.x), num(o.y)));
       const int base = field::add("Threshold");
       const double inner = z.x - spec.ring_width;
       field::setNumber(base, "IField", axis_dist);
@@ -329,8 +339,9 @@ Mesh generate_mesh(const GenerateSpec& spec) {
       const Vec3& p = r.point;
       const int dist = field::add("MathEval");
       const std::string expr =
-          dim == 2 ? fmt::format("Sqrt((x-({}))^2+(y-({}))^2)", num(p.x), num(p.y))
-                   : fmt::format("Sqrt((x-({}))^2+(y-({}))^2+(z-({}))^2)", num(p.x), num(p.y), num(p.z));
+          dim == 2
+              ? fmt::format("Sqrt((x-({}))^2+(y-({}))^2)", num(p.x), num(p.y))
+              : fmt::format("Sqrt((x-({}))^2+(y-({}))^2+(z-({}))^2)", num(p.x), num(p.y), num(p.z));
       field::setString(dist, "F", expr);
       const int th = field::add("Threshold");
       field::setNumber(th, "IField", dist);
@@ -408,16 +419,19 @@ Mesh generate_mesh(const GenerateSpec& spec) {
         }
       if (outer) continue;
       for (std::size_t h = 0; h < frames.size(); ++h)
-        if (all([&](const Vec3& p) { return on_hole_boundary(frames[h], dim, p, tol); })) hole_ents[h].push_back(ftag);
+        if (all([&](const Vec3& p) { return on_hole_boundary(frames[h], dim, p, tol); }))
+          hole_ents[h].push_back(ftag);
     }
     group = 0;
     for (std::size_t i = 0; i < sides.size(); ++i) {
-      if (side_ents[i].empty()) spec_error(fmt::format("no boundary found for face set '{}'", sides[i].name));
+      if (side_ents[i].empty())
+        spec_error(fmt::format("no boundary found for face set '{}'", sides[i].name));
       gmsh::model::addPhysicalGroup(dim - 1, side_ents[i], ++group);
       gmsh::model::setPhysicalName(dim - 1, group, sides[i].name);
     }
     for (std::size_t h = 0; h < frames.size(); ++h) {
-      if (hole_ents[h].empty()) spec_error(fmt::format("hole {} does not cut into the body (it has no wall)", h));
+      if (hole_ents[h].empty())
+        spec_error(fmt::format("hole {} does not cut into the body (it has no wall)", h));
       gmsh::model::addPhysicalGroup(dim - 1, hole_ents[h], ++group);
       gmsh::model::setPhysicalName(dim - 1, group, fmt::format("hole{}", h));
     }

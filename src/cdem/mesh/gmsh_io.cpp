@@ -4,7 +4,9 @@
 // (1 line, 2 triangle, 3 quadrangle, 4 tetrahedron, 15 point).
 #include "cdem/mesh/gmsh_io.hpp"
 
+#include <fmt/format.h>
 #include <gmsh.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -15,9 +17,6 @@
 #include <mutex>
 #include <unordered_map>
 #include <utility>
-
-#include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include "cdem/core/error.hpp"
 
@@ -106,8 +105,9 @@ void GmshSession::check_log() {
       // Gmsh stays locked after an error inside gmsh::open until it is finalized: only an
       // outermost session can reset it.
       if (first_error.empty())
-        first_error = "Gmsh is locked by an earlier error in this session (it did not read the file); "
-                      "use Gmsh from an outermost GmshSession";
+        first_error =
+            "Gmsh is locked by an earlier error in this session (it did not read the file); "
+            "use Gmsh from an outermost GmshSession";
     } else if (line.rfind("Warning", 0) == 0) {
       spdlog::warn("{}: gmsh: {}", context_, line);
     } else {
@@ -164,7 +164,9 @@ std::string group_name(int dim, int tag) {
 }  // namespace
 
 Mesh detail::extract_gmsh_model(const std::string& source) {
-  auto fail = [&](const std::string& what) -> void { throw MeshError(fmt::format("{}: {}", source, what)); };
+  auto fail = [&](const std::string& what) -> void {
+    throw MeshError(fmt::format("{}: {}", source, what));
+  };
 
   // All elements, entity by entity.
   std::map<int, TypeInfo> types;
@@ -183,7 +185,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
         TypeInfo ti;
         int order = 0, primary = 0;
         std::vector<double> local;
-        gmsh::model::mesh::getElementProperties(etypes[i], ti.name, ti.dim, order, ti.num_nodes, local, primary);
+        gmsh::model::mesh::getElementProperties(etypes[i], ti.name, ti.dim, order, ti.num_nodes,
+                                                local, primary);
         it = types.emplace(etypes[i], ti).first;
       }
       Block b;
@@ -197,7 +200,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
       blocks.push_back(std::move(b));
     }
   }
-  if (top < 2) fail("no 2D or 3D elements (a mesh file must contain the mesh, not only the geometry)");
+  if (top < 2)
+    fail("no 2D or 3D elements (a mesh file must contain the mesh, not only the geometry)");
 
   // Element types: linear triangles and quadrangles (2D), linear tetrahedra (3D), their
   // boundary lines / triangles, points. Anything else (second order, hexahedra, ...) is refused.
@@ -206,10 +210,11 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
     const bool ok = top == 2 ? (b.type == 2 || b.type == 3 || b.type == 1 || b.type == 15)
                              : (b.type == 4 || b.type == 2 || b.type == 1 || b.type == 15);
     if (!ok)
-      fail(fmt::format("element {}: unsupported element type '{}' (Gmsh type {}); cdemblast takes "
-                       "linear elements only: 3-node triangles and 4-node quadrilaterals in 2D, 4-node "
-                       "tetrahedra in 3D, with 2-node lines, 3-node triangles and points on boundaries",
-                       b.tags.front(), b.info->name, b.type));
+      fail(fmt::format(
+          "element {}: unsupported element type '{}' (Gmsh type {}); cdemblast takes "
+          "linear elements only: 3-node triangles and 4-node quadrilaterals in 2D, 4-node "
+          "tetrahedra in 3D, with 2-node lines, 3-node triangles and points on boundaries",
+          b.tags.front(), b.info->name, b.type));
   }
   auto is_top = [&](const Block& b) { return b.info->dim == top; };
 
@@ -221,7 +226,7 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
   gmsh::vectorpair groups;
   gmsh::model::getPhysicalGroups(groups);
   std::map<int, int> entity_region;  // top-dim entity tag -> region index
-  std::vector<int> region_group;      // a physical group tag of each region (for messages)
+  std::vector<int> region_group;     // a physical group tag of each region (for messages)
   auto region_of_name = [&](const std::string& name, int group) {
     int r = mesh.region_index(name);
     if (r < 0) {
@@ -257,7 +262,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
       if (default_region < 0) default_region = region_of_name("default", -1);
       r = default_region;
     }
-    const ElemType t = b.type == 2 ? ElemType::Tri3 : (b.type == 3 ? ElemType::Quad4 : ElemType::Tet4);
+    const ElemType t =
+        b.type == 2 ? ElemType::Tri3 : (b.type == 3 ? ElemType::Quad4 : ElemType::Tet4);
     const std::size_t nn = static_cast<std::size_t>(b.info->num_nodes);
     for (std::size_t i = 0; i < b.tags.size(); ++i) {
       Elem e{b.tags[i], t, {0, 0, 0, 0}, r};
@@ -265,15 +271,17 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
       elems.push_back(e);
     }
   }
-  std::stable_sort(elems.begin(), elems.end(), [](const Elem& a, const Elem& b) { return a.tag < b.tag; });
+  std::stable_sort(elems.begin(), elems.end(),
+                   [](const Elem& a, const Elem& b) { return a.tag < b.tag; });
 
   // Every region has elements.
   std::vector<std::size_t> region_count(mesh.region_names.size(), 0);
   for (const Elem& e : elems) ++region_count[static_cast<std::size_t>(e.region)];
   for (std::size_t r = 0; r < region_count.size(); ++r)
     if (region_count[r] == 0)
-      fail(fmt::format("region '{}' (physical group {} of dimension {}) has no elements{}", mesh.region_names[r],
-                       region_group[r], top, " (or all of them belong to an earlier physical group)"));
+      fail(fmt::format("region '{}' (physical group {} of dimension {}) has no elements{}",
+                       mesh.region_names[r], region_group[r], top,
+                       " (or all of them belong to an earlier physical group)"));
 
   // Vertices: the nodes of the elements, numbered 0..n-1 in increasing node tag order.
   std::vector<std::size_t> used;
@@ -284,7 +292,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
   used.erase(std::unique(used.begin(), used.end()), used.end());
   std::unordered_map<std::size_t, std::int32_t> vertex_of;
   vertex_of.reserve(used.size());
-  for (std::size_t i = 0; i < used.size(); ++i) vertex_of.emplace(used[i], static_cast<std::int32_t>(i));
+  for (std::size_t i = 0; i < used.size(); ++i)
+    vertex_of.emplace(used[i], static_cast<std::int32_t>(i));
 
   {
     std::vector<std::size_t> ntags;
@@ -300,7 +309,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
       found[v] = 1;
     }
     for (std::size_t v = 0; v < used.size(); ++v)
-      if (!found[v]) fail(fmt::format("node {} is used by elements but has no coordinates", used[v]));
+      if (!found[v])
+        fail(fmt::format("node {} is used by elements but has no coordinates", used[v]));
   }
 
   const std::size_t ne = elems.size();
@@ -323,7 +333,8 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
   for (const auto& [gdim, gtag] : groups) {
     if (gdim == 0) {
       const std::string name = group_name(gdim, gtag);
-      if (std::find(mesh.point_names.begin(), mesh.point_names.end(), name) == mesh.point_names.end())
+      if (std::find(mesh.point_names.begin(), mesh.point_names.end(), name) ==
+          mesh.point_names.end())
         mesh.point_names.push_back(name);
     }
     if (gdim != top - 1) continue;
@@ -332,12 +343,14 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
     gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, ents);
     std::vector<std::pair<std::size_t, Facet>> facets;
     for (const Block& b : blocks) {
-      if (b.entity_dim != gdim || std::find(ents.begin(), ents.end(), b.entity_tag) == ents.end()) continue;
+      if (b.entity_dim != gdim || std::find(ents.begin(), ents.end(), b.entity_tag) == ents.end())
+        continue;
       if (b.type != facet_type)
-        fail(fmt::format("element {}: a '{}' in face set '{}' (physical group {} of dimension {}); {} face sets "
-                         "take {} only",
-                         b.tags.front(), b.info->name, name, gtag, gdim, top == 2 ? "2D" : "3D",
-                         top == 2 ? "2-node lines" : "3-node triangles"));
+        fail(fmt::format(
+            "element {}: a '{}' in face set '{}' (physical group {} of dimension {}); {} face sets "
+            "take {} only",
+            b.tags.front(), b.info->name, name, gtag, gdim, top == 2 ? "2D" : "3D",
+            top == 2 ? "2-node lines" : "3-node triangles"));
       const std::size_t nn = static_cast<std::size_t>(b.info->num_nodes);
       for (std::size_t i = 0; i < b.tags.size(); ++i) {
         Facet f;
@@ -345,15 +358,17 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
           const std::size_t node = b.nodes[i * nn + k];
           auto it = vertex_of.find(node);
           if (it == vertex_of.end())
-            fail(fmt::format("element {} of face set '{}': node {} is not a vertex of any {}D element (a face "
-                             "set must lie on the mesh)",
-                             b.tags[i], name, node, top));
+            fail(fmt::format(
+                "element {} of face set '{}': node {} is not a vertex of any {}D element (a face "
+                "set must lie on the mesh)",
+                b.tags[i], name, node, top));
           f.v[k] = it->second;
         }
         facets.emplace_back(b.tags[i], f);
       }
     }
-    std::stable_sort(facets.begin(), facets.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::stable_sort(facets.begin(), facets.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
     FaceSet* fs = nullptr;
     for (FaceSet& other : mesh.face_sets)
       if (other.name == name) fs = &other;
@@ -364,7 +379,9 @@ Mesh detail::extract_gmsh_model(const std::string& source) {
     for (const auto& tf : facets) fs->facets.push_back(tf.second);
   }
   for (const FaceSet& fs : mesh.face_sets)
-    if (fs.facets.empty()) fail(fmt::format("face set '{}' (physical group of dimension {}) has no elements", fs.name, top - 1));
+    if (fs.facets.empty())
+      fail(fmt::format("face set '{}' (physical group of dimension {}) has no elements", fs.name,
+                       top - 1));
 
   check_mesh(mesh, source);
   return mesh;
@@ -380,7 +397,8 @@ Mesh read_gmsh(const std::string& path) {
     if (std::filesystem::is_directory(path, ec))
       throw MeshError(fmt::format("cannot open mesh file '{}': is a directory", path));
     std::ifstream f(path, std::ios::binary);
-    if (!f) throw MeshError(fmt::format("cannot open mesh file '{}': {}", path, std::strerror(errno)));
+    if (!f)
+      throw MeshError(fmt::format("cannot open mesh file '{}': {}", path, std::strerror(errno)));
   }
   const std::string source = fmt::format("mesh file '{}'", path);
   GmshSession session(source);
@@ -403,15 +421,18 @@ void write_gmsh(const Mesh& mesh, const std::string& path) {
   };
   // Structural checks only (a geometrically bad mesh may be written, e.g. for tests).
   const std::size_t ne = mesh.num_elements();
-  if (mesh.dim != 2 && mesh.dim != 3) fail(fmt::format("mesh dimension {} (expected 2 or 3)", mesh.dim));
-  if (mesh.elem_vertices.size() != ne || mesh.elem_region.size() != ne) fail("inconsistent element arrays");
+  if (mesh.dim != 2 && mesh.dim != 3)
+    fail(fmt::format("mesh dimension {} (expected 2 or 3)", mesh.dim));
+  if (mesh.elem_vertices.size() != ne || mesh.elem_region.size() != ne)
+    fail("inconsistent element arrays");
   for (std::size_t e = 0; e < ne; ++e) {
     for (int k = 0; k < nodes_of(mesh.elem_type[e]); ++k) {
       const std::int32_t v = mesh.elem_vertices[e][static_cast<std::size_t>(k)];
       if (v < 0 || static_cast<std::size_t>(v) >= mesh.vertices.size())
         fail(fmt::format("element #{}: vertex index {} out of range", e, v));
     }
-    if (mesh.elem_region[e] < 0 || static_cast<std::size_t>(mesh.elem_region[e]) >= mesh.region_names.size())
+    if (mesh.elem_region[e] < 0 ||
+        static_cast<std::size_t>(mesh.elem_region[e]) >= mesh.region_names.size())
       fail(fmt::format("element #{}: region index {} out of range", e, mesh.elem_region[e]));
   }
   for (const FaceSet& fs : mesh.face_sets)
@@ -449,7 +470,9 @@ void write_gmsh(const Mesh& mesh, const std::string& path) {
       }
       gmsh::model::mesh::addNodes(dim, 1, tags, coord);
     }
-    auto msh_type = [](ElemType t) { return t == ElemType::Tri3 ? 2 : (t == ElemType::Quad4 ? 3 : 4); };
+    auto msh_type = [](ElemType t) {
+      return t == ElemType::Tri3 ? 2 : (t == ElemType::Quad4 ? 3 : 4);
+    };
     for (std::size_t r = 0; r < mesh.region_names.size(); ++r) {
       std::map<int, std::pair<std::vector<std::size_t>, std::vector<std::size_t>>> by_type;
       for (std::size_t e = 0; e < ne; ++e) {
@@ -457,7 +480,8 @@ void write_gmsh(const Mesh& mesh, const std::string& path) {
         auto& [tags, nodes] = by_type[msh_type(mesh.elem_type[e])];
         tags.push_back(elem_tag(e));
         for (int k = 0; k < nodes_of(mesh.elem_type[e]); ++k)
-          nodes.push_back(static_cast<std::size_t>(mesh.elem_vertices[e][static_cast<std::size_t>(k)]) + 1);
+          nodes.push_back(
+              static_cast<std::size_t>(mesh.elem_vertices[e][static_cast<std::size_t>(k)]) + 1);
       }
       std::vector<int> t;
       std::vector<std::vector<std::size_t>> tags, nodes;
@@ -480,7 +504,8 @@ void write_gmsh(const Mesh& mesh, const std::string& path) {
       std::vector<std::size_t> tags, nodes;
       for (const Facet& f : fs.facets) {
         tags.push_back(next_tag++);
-        for (int k = 0; k < f.count(); ++k) nodes.push_back(static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)]) + 1);
+        for (int k = 0; k < f.count(); ++k)
+          nodes.push_back(static_cast<std::size_t>(f.v[static_cast<std::size_t>(k)]) + 1);
       }
       gmsh::model::mesh::addElements(dim - 1, fs_tag, {dim == 2 ? 1 : 2}, {tags}, {nodes});
       gmsh::model::addPhysicalGroup(dim - 1, {fs_tag}, fs_tag);

@@ -110,12 +110,12 @@ struct GenerateSpec {
   bool quads = false;       // 2D: recombine into quadrilaterals (quad-dominant; leftover tris)
   std::vector<HoleSpec> holes;
   std::vector<RefineSpec> refine;
-  double ring_width = 0;    // cylinder: an outer ring of this width is its own region "ring"
+  double ring_width = 0;         // cylinder: an outer ring of this width is its own region "ring"
   double ring_element_size = 0;  // element size in the ring (0: element_size)
-  std::string region = "rock";  // name of the main region
-  int circle_segments = 16;  // curved walls: at least this many elements per full turn (sizes
-                             // from curvature, Mesh.MeshSizeFromCurvature); 0: sizes from the
-                             // field only
+  std::string region = "rock";   // name of the main region
+  int circle_segments = 16;      // curved walls: at least this many elements per full turn (sizes
+                                 // from curvature, Mesh.MeshSizeFromCurvature); 0: sizes from the
+                                 // field only
 };
 // Face sets of generated meshes: rectangle "left" "right" "bottom" "top"; box the same plus
 // "front" (y min) and "back" (y max), with "bottom"/"top" at z min/max; cylinder "side",

@@ -1,12 +1,12 @@
 // Mesh checks shared by read_gmsh and generate_mesh: consistency, 2D plane and orientation,
 // degenerate / inverted / non-convex elements. See check_mesh in gmsh_io.hpp.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
-
-#include <fmt/format.h>
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
@@ -15,7 +15,7 @@ namespace cdem {
 namespace {
 
 // Relative tolerances of the checks (fractions of the mesh extent or of the mean measure).
-constexpr double plane_tol = 1e-12;      // |z| of a 2D mesh, relative to its extent
+constexpr double plane_tol = 1e-12;       // |z| of a 2D mesh, relative to its extent
 constexpr double degenerate_tol = 1e-12;  // |area| or |volume|, relative to the mean
 
 class Checker {
@@ -47,7 +47,8 @@ class Checker {
   }
 
   void check_structure() {
-    if (m_.dim != 2 && m_.dim != 3) fail(fmt::format("mesh dimension {} (expected 2 or 3)", m_.dim));
+    if (m_.dim != 2 && m_.dim != 3)
+      fail(fmt::format("mesh dimension {} (expected 2 or 3)", m_.dim));
     const std::size_t ne = m_.elem_type.size();
     if (ne == 0) fail(fmt::format("no {}D elements", m_.dim));
     if (m_.elem_vertices.size() != ne || m_.elem_region.size() != ne ||
@@ -57,12 +58,14 @@ class Checker {
     const auto nr = static_cast<std::int32_t>(m_.region_names.size());
     for (std::size_t e = 0; e < ne; ++e) {
       const ElemType t = m_.elem_type[e];
-      const bool ok_type = m_.dim == 2 ? (t == ElemType::Tri3 || t == ElemType::Quad4) : t == ElemType::Tet4;
+      const bool ok_type =
+          m_.dim == 2 ? (t == ElemType::Tri3 || t == ElemType::Quad4) : t == ElemType::Tet4;
       if (!ok_type) fail_elem(e, fmt::format("not a {}D element type", m_.dim));
       const int n = nodes_of(t);
       for (int k = 0; k < 4; ++k) {
         const std::int32_t v = m_.elem_vertices[e][static_cast<std::size_t>(k)];
-        if (k < n && (v < 0 || v >= nv)) fail_elem(e, fmt::format("vertex index {} out of range", v));
+        if (k < n && (v < 0 || v >= nv))
+          fail_elem(e, fmt::format("vertex index {} out of range", v));
         if (k >= n && v != -1) fail_elem(e, "unused vertex slot is not -1");
       }
       if (m_.elem_region[e] < 0 || m_.elem_region[e] >= nr)
@@ -78,7 +81,8 @@ class Checker {
         for (int k = 0; k < fn; ++k) {
           const std::int32_t v = fc.v[static_cast<std::size_t>(k)];
           if (v < 0 || v >= nv)
-            fail(fmt::format("face set '{}': facet {} vertex index {} out of range", fs.name, f, v));
+            fail(
+                fmt::format("face set '{}': facet {} vertex index {} out of range", fs.name, f, v));
         }
       }
     }
@@ -113,7 +117,8 @@ class Checker {
               fail_elem(e, fmt::format("vertex at z = {:g} off the z = 0 plane of a 2D mesh "
                                        "(plane strain meshes must lie in z = 0)",
                                        m_.vertices[i].z));
-        fail(fmt::format("vertex {} at z = {:g} off the z = 0 plane of a 2D mesh", i, m_.vertices[i].z));
+        fail(fmt::format("vertex {} at z = {:g} off the z = 0 plane of a 2D mesh", i,
+                         m_.vertices[i].z));
       }
     }
     for (Vec3& p : m_.vertices) p.z = 0.0;
@@ -125,7 +130,8 @@ class Checker {
     for (std::size_t e = 0; e < ne; ++e) {
       const double a2 = twice_area(e);
       if (!(std::abs(a2) >= degenerate_tol * mean))
-        fail_elem(e, fmt::format("degenerate element (area {:g} m^2, mean {:g} m^2)", 0.5 * a2, 0.5 * mean));
+        fail_elem(e, fmt::format("degenerate element (area {:g} m^2, mean {:g} m^2)", 0.5 * a2,
+                                 0.5 * mean));
       auto& v = m_.elem_vertices[e];
       if (a2 < 0) {  // clockwise: reverse the cycle, keeping vertex 0
         if (m_.elem_type[e] == ElemType::Tri3)
@@ -139,7 +145,8 @@ class Checker {
           const Vec3 c = x(e, k);
           const double z = cross(x(e, (k + 1) % 4) - c, x(e, (k + 3) % 4) - c).z;
           if (!(z > degenerate_tol * std::abs(a2)))
-            fail_elem(e, fmt::format("non-convex or self-intersecting quadrilateral (corner {})", k));
+            fail_elem(e,
+                      fmt::format("non-convex or self-intersecting quadrilateral (corner {})", k));
         }
       }
     }
@@ -157,7 +164,8 @@ class Checker {
     for (std::size_t e = 0; e < ne; ++e) {
       const double v6 = six_volume(e);
       if (!(std::abs(v6) >= degenerate_tol * mean))
-        fail_elem(e, fmt::format("degenerate element (volume {:g} m^3, mean {:g} m^3)", v6 / 6, mean / 6));
+        fail_elem(e, fmt::format("degenerate element (volume {:g} m^3, mean {:g} m^3)", v6 / 6,
+                                 mean / 6));
       if (v6 < 0)
         fail_elem(e, fmt::format("inverted tetrahedron (negative volume): V = {:g} m^3", v6 / 6));
     }

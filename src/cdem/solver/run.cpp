@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "cdem/analysis/blast_quality.hpp"
 #include "cdem/analysis/damage.hpp"
 #include "cdem/analysis/monitors.hpp"
 #include "cdem/core/error.hpp"
@@ -226,6 +227,30 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"collapsed_explosive_blocks", std::to_string(solids.dead_count)},
       {"field_outputs", std::to_string(out.field_outputs())},
   };
+  // Blasting quality of the final state: fragments, grading (main rock mass excluded), funnel.
+  const BlastQuality bq = blast_quality(m, c);
+  {
+    std::FILE* g = std::fopen((std::filesystem::path(opt.out_dir) / "grading.csv").string().c_str(), "w");
+    if (g) {
+      std::fputs("size,passing_pct\n", g);
+      for (std::size_t i = 0; i < bq.grading.size.size(); ++i)
+        std::fprintf(g, "%.9g,%.9g\n", bq.grading.size[i], bq.grading.passing_pct[i]);
+      std::fclose(g);
+    }
+  }
+  std::size_t nfrag = 0;
+  for (const auto& f : bq.fragments.fragments) nfrag += f.volume > 0;
+  kv.emplace_back("fragments", std::to_string(nfrag));
+  kv.emplace_back("main_fragment_volume",
+                  json_number(bq.main_fragment >= 0 ? bq.fragments.fragments[bq.main_fragment].volume : 0.0));
+  for (int i = 0; i < 9; ++i)
+    kv.emplace_back(fmt::format("d{}_m", 10 * (i + 1)), json_number(bq.grading.d[i]));
+  kv.emplace_back("funnel_depth_m", json_number(bq.funnel.depth));
+  kv.emplace_back("funnel_lx_m", json_number(bq.funnel.l_x));
+  kv.emplace_back("funnel_ly_m", json_number(bq.funnel.l_y));
+  kv.emplace_back("funnel_axial_ratio", json_number(bq.funnel.axial_ratio));
+  kv.emplace_back("footage_m", json_number(bq.funnel.footage));
+  kv.emplace_back("funnel_broken_volume", json_number(bq.funnel.broken_volume));
   std::string peaks = "{";
   for (std::size_t q = 0; q < monitors.size(); ++q)
     peaks += fmt::format("{}{}: {{\"peak_von_mises\": {}, \"time\": {}}}", q ? ", " : "",

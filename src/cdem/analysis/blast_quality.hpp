@@ -1,0 +1,27 @@
+// The blasting-quality measures of a model state (SPEC 4): fragments (connected blocks through
+// intact spring points), the grading curve of the fragments, and the blasting funnel. Explosive
+// blocks are not rock: they get volume 0 and no bonds, so they never count as fragments.
+#pragma once
+#include <vector>
+
+#include "cdem/analysis/fragments.hpp"
+#include "cdem/analysis/funnel.hpp"
+#include "cdem/analysis/grading.hpp"
+#include "cdem/io/case.hpp"
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+FragmentResult model_fragments(const Model& m);
+
+struct BlastQuality {
+  FragmentResult fragments;
+  Grading grading;
+  Funnel funnel;
+  std::int32_t main_fragment = -1;
+};
+
+// Fragments, grading (the main rock mass excluded) and funnel of the current state.
+BlastQuality blast_quality(const Model& m, const Case& c);
+
+}  // namespace cdem

@@ -1,0 +1,163 @@
+#!/usr/bin/env bash
+# The report tool (scripts/cdem_report.py): a quick 2D run and its report, a second run and
+# the overlay of both, and a run with grading data. Checks that every expected picture exists,
+# is a real PNG of the expected size, is not blank, and that index.html and summary.md only
+# reference files that exist.
+#
+#   bash test_report.sh <cdemblast-binary> <repo-root>
+set -euo pipefail
+
+BIN=${1:?usage: test_report.sh <cdemblast-binary> <repo-root>}
+ROOT=${2:?usage: test_report.sh <cdemblast-binary> <repo-root>}
+PY=/usr/bin/python3
+REPORT="$ROOT/scripts/cdem_report.py"
+CASE="$ROOT/examples/plate_with_hole_2d/case.toml"
+
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+[ -x "$PY" ] || fail "$PY not found (the report needs Debian's python3 with matplotlib)"
+"$PY" -c 'import numpy, matplotlib' 2>/dev/null ||
+  fail "$PY lacks numpy or matplotlib (apt-get install python3-numpy python3-matplotlib)"
+
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+
+quick=(--set mesh.generate.element_size=0.1 --set simulation.end_time=3e-4 -q)
+"$BIN" run "$CASE" --out "$TMP/tri" "${quick[@]}" >"$TMP/run_tri.log" 2>&1 ||
+  { cat "$TMP/run_tri.log"; fail "the triangle run failed"; }
+"$BIN" run "$CASE" --out "$TMP/quad" "${quick[@]}" --set mesh.generate.quads=true \
+  --set 'title="plate_quads"' >"$TMP/run_quad.log" 2>&1 ||
+  { cat "$TMP/run_quad.log"; fail "the quad run failed"; }
+
+# A run with grading data: the triangle run plus a grading curve and d40/d80 in its summary.
+mkdir "$TMP/graded"
+cp -r "$TMP/tri/." "$TMP/graded/"
+"$PY" - "$TMP/graded/summary.json" <<'EOF'
+import json, sys
+p = sys.argv[1]
+s = json.load(open(p))
+s["title"] = "plate_graded"
+s["fragments"] = 5
+s["d40_m"], s["d80_m"] = 0.03, 0.07
+s["grading"] = {"size_m": [0.01, 0.02, 0.04, 0.06, 0.1], "passing_pct": [5, 20, 50, 75, 100]}
+s["funnel_depth_m"] = 0.25
+json.dump(s, open(p, "w"))
+EOF
+
+"$PY" "$REPORT" "$TMP/tri" >"$TMP/rep1.log" 2>&1 || { cat "$TMP/rep1.log"; fail "report of one run failed"; }
+"$PY" "$REPORT" "$TMP/tri" "$TMP/quad" >"$TMP/rep2.log" 2>&1 ||
+  { cat "$TMP/rep2.log"; fail "overlay report failed"; }
+"$PY" "$REPORT" "$TMP/graded" "$TMP/quad" --out "$TMP/cmp_graded" >"$TMP/rep3.log" 2>&1 ||
+  { cat "$TMP/rep3.log"; fail "overlay report with --out failed"; }
+
+# A directory that does not exist is an error (exit status 2), not a traceback.
+set +e
+"$PY" "$REPORT" "$TMP/no_such_run" >"$TMP/rep4.log" 2>&1
+rc=$?
+set -e
+[ "$rc" = 2 ] || { cat "$TMP/rep4.log"; fail "a missing run directory gave exit status $rc, expected 2"; }
+grep -q "not a directory" "$TMP/rep4.log" || fail "no clear message for a missing run directory"
+
+"$PY" - "$TMP" <<'EOF'
+import os, re, struct, sys
+import numpy as np
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.image as mpimg
+
+tmp = sys.argv[1]
+errors = []
+
+def check_png(path, size=None):
+    """A real, non-blank PNG; size = (width, height) when it is fixed by the script."""
+    if not os.path.isfile(path):
+        errors.append(f"{path}: missing")
+        return
+    with open(path, "rb") as f:
+        head = f.read(33)
+    if head[:8] != b"\x89PNG\r\n\x1a\n" or head[12:16] != b"IHDR":
+        errors.append(f"{path}: not a PNG file")
+        return
+    w, h = struct.unpack(">II", head[16:24])
+    img = mpimg.imread(path)
+    if img.shape[1] != w or img.shape[0] != h:
+        errors.append(f"{path}: IHDR says {w}x{h}, the image is {img.shape[1]}x{img.shape[0]}")
+    if size is not None and (w, h) != size:
+        errors.append(f"{path}: {w}x{h} pixels, expected {size[0]}x{size[1]}")
+    if not (400 <= w <= 4000 and 300 <= h <= 4000):
+        errors.append(f"{path}: implausible size {w}x{h}")
+    rgb = img[..., :3].astype(float)
+    if rgb.std() < 0.02:
+        errors.append(f"{path}: blank (pixel std {rgb.std():.4f})")
+    inked = np.mean(rgb.min(axis=2) < 0.9)
+    if inked < 0.03:
+        errors.append(f"{path}: almost nothing drawn ({100 * inked:.1f} % of the pixels)")
+
+def check_links(out_dir):
+    """index.html and summary.md reference only files that exist (and reference the PNGs)."""
+    for name in ("index.html", "summary.md"):
+        p = os.path.join(out_dir, name)
+        if not os.path.isfile(p):
+            errors.append(f"{p}: missing")
+            return
+    text = open(os.path.join(out_dir, "index.html")).read()
+    if not text.lstrip().lower().startswith("<!doctype html>") or "</html>" not in text:
+        errors.append(f"{out_dir}/index.html: not a complete HTML page")
+    refs = re.findall(r'(?:src|href)="([^"]+)"', text)
+    md = open(os.path.join(out_dir, "summary.md")).read()
+    refs_md = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
+    for r in refs + refs_md:
+        if re.match(r"^[a-z]+:", r) or r.startswith("#"):
+            continue
+        if not os.path.exists(os.path.join(out_dir, r)):
+            errors.append(f"{out_dir}: reference to missing file {r}")
+    for png in sorted(f for f in os.listdir(out_dir) if f.endswith(".png")):
+        if png not in refs:
+            errors.append(f"{out_dir}/index.html does not show {png}")
+        if png not in refs_md:
+            errors.append(f"{out_dir}/summary.md does not show {png}")
+    return text, md
+
+fixed = {"monitors.png": (1350, 1425), "fracture.png": (1275, 750), "energy.png": (1350, 1200)}
+
+# One run.
+one = os.path.join(tmp, "tri", "report")
+for png in ("monitors.png", "fracture.png", "energy.png", "damage_maps.png", "von_mises_maps.png",
+            "damage_final.png"):
+    check_png(os.path.join(one, png), fixed.get(png))
+if os.path.exists(os.path.join(one, "grading.png")):
+    errors.append(f"{one}/grading.png: written without grading data")
+res = check_links(one)
+if res:
+    html, md = res
+    if "grading.png skipped" not in md:
+        errors.append(f"{one}/summary.md: no note that grading.png was skipped")
+    for needle in ("fracture degree (area)", "plate_with_hole_2d", "peak von Mises"):
+        if needle not in md or needle not in html:
+            errors.append(f"{one}: '{needle}' missing from summary.md or index.html")
+
+# Overlay of two runs (default output directory).
+cmp_dir = os.path.join(tmp, "tri", "report_compare")
+for png, size in (("monitors.png", (1350, 1425)), ("fracture.png", (2100, 720)),
+                  ("energy.png", (2250, 1275)), ("damage_final_compare.png", None)):
+    check_png(os.path.join(cmp_dir, png), size)
+res = check_links(cmp_dir)
+if res and not all(s in res[1] for s in ("plate_with_hole_2d", "plate_quads")):
+    errors.append(f"{cmp_dir}/summary.md: the comparison table lacks a run")
+
+# Overlay with grading data and --out.
+g_dir = os.path.join(tmp, "cmp_graded")
+for png in ("monitors.png", "fracture.png", "energy.png", "grading.png", "damage_final_compare.png"):
+    check_png(os.path.join(g_dir, png), (1275, 825) if png == "grading.png" else None)
+res = check_links(g_dir)
+if res:
+    for needle in ("d40 (40 % passing)", "funnel depth", "left out of grading.png"):
+        if needle not in res[1]:
+            errors.append(f"{g_dir}/summary.md: '{needle}' missing")
+
+if errors:
+    print("\n".join(errors))
+    sys.exit(1)
+print("report checks passed")
+EOF
+echo "PASS: test_report"

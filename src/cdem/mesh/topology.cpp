@@ -67,6 +67,10 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   m.springs_per_iface = mesh.dim == 2 ? 2 : 3;
   m.region_names = mesh.region_names;
   m.block_materials = block_materials;
+  for (const auto& bm : block_materials) {
+    m.mat_lambda.push_back(bm.lambda());
+    m.mat_shear.push_back(bm.shear());
+  }
 
   // ---- region -> block material ----
   const std::size_t nreg = mesh.region_names.size();

@@ -90,6 +90,7 @@ struct Model {
   std::vector<BlockMaterial> block_materials;
   std::vector<InterfaceMaterial> iface_materials;
   std::vector<SpringLaw> spring_laws;          // parallel to iface_materials
+  std::vector<double> mat_lambda, mat_shear;   // Lame constants per block material (Pa)
   double release_distance_factor = 0.5;        // broken pair released beyond this x block size
 
   // ---- regions and boundary facets (from the mesh) ----

@@ -49,9 +49,10 @@ inline Point2D corot_point_2d(double f00, double f01, double f10, double f11, co
   return out;
 }
 
-ElasticConst elastic_of(const Model& m, std::int32_t b) {
-  const auto& mat = m.block_materials[m.block_material[b]];
-  return {mat.lambda(), mat.shear()};
+// Lame constants of a block from the per-material table (no divisions in the loop).
+inline ElasticConst elastic_of(const Model& m, std::int32_t b) {
+  const auto k = m.block_material[b];
+  return {m.mat_lambda[k], m.mat_shear[k]};
 }
 
 void note_inverted(std::int64_t& count, std::int32_t b, std::int32_t* first) {

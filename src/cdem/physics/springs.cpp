@@ -131,20 +131,45 @@ void spring_forces(Model& m, double dt, double t) {
     const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(pa, np), np) +
                               face_area_vector(std::span<const Vec3>(pb, np), np));
     const SpringLaw& law = m.spring_laws[m.iface_material[i]];
-    const double release =
-        m.release_distance_factor * 0.5 * (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
     for (int q = 0; q < np; ++q) {
       const std::int64_t s = s0 + q;
-      if (m.sp_state[s] == kReleased) {
+      const std::uint8_t state = m.sp_state[s];
+      if (state == kReleased) {
         m.sp_force[s] = {};
         continue;
       }
       const auto a = m.sp_a[s], b = m.sp_b[s];
+      const Vec3 d = pb[q] - pa[q];
+      const Vec3 du = dt * (m.v[b] - m.v[a]);
+      // Fast path: an intact spring point under a linear law (elastic, or Mohr-Coulomb before
+      // it breaks) stores energy without dissipating it, so only its forces are updated. Any
+      // other state (breaking now, broken, softening) takes the full update with the
+      // dissipation book-keeping.
+      if (state == kIntact && law.law != InterfaceLaw::FractureEnergy) {
+        Vec3 fs = m.sp_fs[s];
+        const double fs_old = norm(fs);
+        fs -= dot(fs, n) * n;
+        const double fs_proj = norm(fs);
+        if (fs_proj > 0) fs *= fs_old / fs_proj;
+        const double ks = m.sp_ks[s];
+        fs += ks * (du - dot(du, n) * n);
+        const double fn = m.sp_kn[s] * dot(d, n);
+        const double area = m.sp_area[s];
+        const bool holds = law.law == InterfaceLaw::Elastic ||
+                           (fn < law.ft * area && norm(fs) < law.c * area - fn * law.tan_phi);
+        if (holds) {
+          m.sp_fn[s] = fn;
+          m.sp_fs[s] = fs;
+          m.sp_force[s] = fn * n + fs;
+          continue;
+        }
+      }
       SpringPoint sp{m.sp_kn[s],   m.sp_ks[s],   m.sp_area[s],  m.sp_fn[s],
                      m.sp_fs[s],   m.sp_w[s],    m.sp_slip[s],  m.sp_dil[s],
-                     m.sp_state[s], m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s]};
-      m.sp_force[s] = update_spring_point(sp, law, pb[q] - pa[q], dt * (m.v[b] - m.v[a]), n, t,
-                                          release, m.sp_force[s]);
+                     state,        m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s]};
+      const double release = m.release_distance_factor * 0.5 *
+                             (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+      m.sp_force[s] = update_spring_point(sp, law, d, du, n, t, release, m.sp_force[s]);
       m.sp_fn[s] = sp.fn;
       m.sp_fs[s] = sp.fs;
       m.sp_w[s] = sp.w;

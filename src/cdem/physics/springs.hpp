@@ -13,7 +13,10 @@
 // After breaking: compression only and Coulomb friction |F_s| <= -F_n tan(phi_r); a broken
 // pair whose nodes have separated by more than release_distance is released (no force).
 // Dissipated energy per spring point: the work done on it minus the change of its elastic
-// energy F_n^2 / (2 k_n) + |F_s|^2 / (2 k_s), accumulated with the trapezoidal rule.
+// energy F_n^2 / (2 k_n) + |F_s|^2 / (2 k_s), accumulated with the trapezoidal rule. An intact
+// spring point under a linear law (elastic, Mohr-Coulomb before breaking) dissipates nothing,
+// so spring_forces skips that book-keeping on its fast path; the step in which it breaks
+// accounts for the released energy.
 #pragma once
 #include <cstdint>
 

@@ -61,8 +61,9 @@ plt.rcParams.update({
 
 
 # ----------------------------------------------------------------------------- reading
-def read_csv(path):
-    """{column: np.array} (floats; text columns stay lists of str), or None if missing/empty."""
+def read_table(path):
+    """{column: np.array} (floats; text columns stay lists of str), or None if the file is
+    missing or has no data row."""
     if not os.path.isfile(path):
         return None
     with open(path, newline="") as f:
@@ -82,7 +83,15 @@ def read_csv(path):
             out[h] = np.array([float(v) for v in vals])
         except ValueError:
             out[h] = vals
-    if "time" not in out or not isinstance(out["time"], np.ndarray) or out["time"].size == 0:
+    if not any(len(v) for v in out.values()):
+        return None
+    return out
+
+
+def read_csv(path):
+    """A time history table (read_table with a numeric time column), or None."""
+    out = read_table(path)
+    if not out or not isinstance(out.get("time"), np.ndarray) or out["time"].size == 0:
         return None
     return out
 
@@ -100,6 +109,21 @@ def read_monitors(path):
         sel = names == n
         out[n] = {k: v[sel] for k, v in data.items() if isinstance(v, np.ndarray)}
     return out
+
+
+def read_up(run_dir):
+    """The free-surface normal (analysis.up of case.resolved.toml), default +z."""
+    path = os.path.join(run_dir, "case.resolved.toml")
+    try:
+        import tomllib
+        with open(path, "rb") as f:
+            up = tomllib.load(f).get("analysis", {}).get("up")
+        up = np.array(up, float)[:3]
+        if up.shape == (3,) and np.all(np.isfinite(up)) and np.linalg.norm(up) > 0:
+            return up / np.linalg.norm(up)
+    except Exception:  # no case file, no key: the default
+        pass
+    return np.array([0.0, 0.0, 1.0])
 
 
 def read_monitor_points(run_dir):
@@ -135,6 +159,7 @@ class Run:
         self.fracture = read_csv(os.path.join(self.dir, "fracture.csv"))
         self.monitors = read_monitors(os.path.join(self.dir, "monitors.csv"))
         self.monitor_points = read_monitor_points(self.dir)
+        self.up = read_up(self.dir)
         self.fields = cdem_vtu.read_pvd(os.path.join(self.dir, "fields.pvd"))
         self.fields = [(t, p) for t, p in self.fields if os.path.isfile(p)]
         self.cracks = cdem_vtu.read_pvd(os.path.join(self.dir, "cracks.pvd"))
@@ -145,8 +170,13 @@ class Run:
     def dim(self):
         """2 or 3 from the cell types of the first field file (None without fields)."""
         if self._dim is None and self.fields:
-            g = cdem_vtu.read_vtu(self.fields[-1][1])
-            self._dim = 3 if np.any(g.types == VTK_TETRA) else 2
+            for _, path in reversed(self.fields):
+                try:
+                    g = cdem_vtu.read_vtu(path)
+                    self._dim = 3 if np.any(g.types == VTK_TETRA) else 2
+                    break
+                except VtuError:
+                    continue
         return self._dim
 
     def cracks_at(self, t):
@@ -230,6 +260,24 @@ class FieldFrame:
         self.dim = 3 if np.any(g.types == VTK_TETRA) else 2
         self.crack_path = run.cracks_at(self.time)
         self._cracks = None
+        self._view = None
+        # 3D orientation: `up` is the free-surface normal; va its dominant axis (s its sign);
+        # (h1, h2) the horizontal axes, ordered so that e_h1 x e_h2 = up (a view from above
+        # is not mirrored). The top view shows (h1, h2); the section is the plane
+        # h2 = centre, drawn in (h1, va) with the free surface at the top.
+        self.up = np.asarray(getattr(run, "up", (0.0, 0.0, 1.0)), float)
+        self.va = int(np.argmax(np.abs(self.up)))
+        self.s = 1.0 if self.up[self.va] >= 0 else -1.0
+        self.h1, self.h2 = [(1, 2), (2, 0), (0, 1)][self.va]
+        if self.s < 0:
+            self.h1, self.h2 = self.h2, self.h1
+        self.section_at = 0.5 * (self.X[:, self.h2].min() + self.X[:, self.h2].max())
+
+    def view(self):
+        """The picture of this frame: the whole model in 2D, the section in 3D (cached)."""
+        if self._view is None:
+            self._view = View(self)
+        return self._view
 
     def cell(self, name):
         return self.grid.cell_array(name)
@@ -279,13 +327,14 @@ class FieldFrame:
         return Pc[nodes][:, :, :2]
 
     # ---- 3D ----
-    def section(self, y0):
-        """Cut of the tets by the reference plane y = y0: [(verts (n,k,2) in x-z, cell ids)]."""
+    def section(self):
+        """Cut of the tets by the reference plane X[h2] = section_at:
+        [(verts (n, k, 2) in (h1, va) coordinates, cell ids)]."""
         tets = self.grid.cell_nodes(VTK_TETRA)
         ids = self.grid.cells_of_type(VTK_TETRA)
         if tets.size == 0:
             return []
-        d = self.X[tets][:, :, 1] - y0
+        d = self.X[tets][:, :, self.h2] - self.section_at
         cut = (d.min(1) < 0) & (d.max(1) >= 0)
         tets, ids, d = tets[cut], ids[cut], d[cut]
         edges = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
@@ -293,8 +342,8 @@ class FieldFrame:
         cross = (da >= 0) != (db >= 0)
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(cross, da / (da - db), 0.0)
-        Pa = self.P[tets[:, edges[:, 0]]][:, :, [0, 2]]
-        Pb = self.P[tets[:, edges[:, 1]]][:, :, [0, 2]]
+        Pa = self.P[tets[:, edges[:, 0]]][:, :, [self.h1, self.va]]
+        Pb = self.P[tets[:, edges[:, 1]]][:, :, [self.h1, self.va]]
         pts = Pa + s[:, :, None] * (Pb - Pa)
         n = cross.sum(1)
         out = []
@@ -310,8 +359,8 @@ class FieldFrame:
             out.append((v, ids[sel]))
         return out
 
-    def crack_section(self, y0):
-        """Crack traces in the plane y = y0 as segments (m, 2, 2) in x-z, or None."""
+    def crack_section(self):
+        """Crack traces in the section plane as segments (m, 2, 2) in (h1, va), or None."""
         c = self.cracks()
         if c is None:
             return None
@@ -319,7 +368,7 @@ class FieldFrame:
         tri = grid.cell_nodes(VTK_TRIANGLE)
         if tri.size == 0:
             return None
-        d = Xc[tri][:, :, 1] - y0
+        d = Xc[tri][:, :, self.h2] - self.section_at
         cut = (d.min(1) < 0) & (d.max(1) >= 0)
         tri, d = tri[cut], d[cut]
         edges = np.array([(0, 1), (1, 2), (2, 0)])
@@ -331,13 +380,14 @@ class FieldFrame:
         tri, da, db, cross = tri[keep], da[keep], db[keep], cross[keep]
         with np.errstate(divide="ignore", invalid="ignore"):
             s = np.where(cross, da / (da - db), 0.0)
-        Pa = Pc[tri[:, edges[:, 0]]][:, :, [0, 2]]
-        Pb = Pc[tri[:, edges[:, 1]]][:, :, [0, 2]]
+        Pa = Pc[tri[:, edges[:, 0]]][:, :, [self.h1, self.va]]
+        Pb = Pc[tri[:, edges[:, 1]]][:, :, [self.h1, self.va]]
         pts = Pa + s[:, :, None] * (Pb - Pa)
         return pts[cross].reshape(-1, 2, 2)
 
     def top_faces(self):
-        """Up-facing boundary faces, lowest first: (verts (n,3,2) in x-y, cell ids, mean u_z)."""
+        """Boundary faces looking up (out of the free surface), lowest first:
+        (verts (n, 3, 2) in (h1, h2), cell ids, mean displacement along up)."""
         tets = self.grid.cell_nodes(VTK_TETRA)
         ids = self.grid.cells_of_type(VTK_TETRA)
         if tets.size == 0:
@@ -361,12 +411,35 @@ class FieldFrame:
         nrm = np.cross(b - a, c - a)
         flip = np.einsum("ij,ij->i", nrm, self.X[other] - a) > 0
         nrm[flip] *= -1
-        up = nrm[:, 2] > 0.2 * np.linalg.norm(nrm, axis=1)
-        f, owner = f[up], owner[up]
-        zmean = self.P[f][:, :, 2].mean(1)
-        order = np.argsort(zmean, kind="stable")
+        facing = nrm @ self.up > 0.2 * np.linalg.norm(nrm, axis=1)
+        f, owner = f[facing], owner[facing]
+        height = (self.P[f] @ self.up).mean(1)
+        order = np.argsort(height, kind="stable")
         f, owner = f[order], owner[order]
-        return self.P[f][:, :, :2], ids[owner], self.u[f][:, :, 2].mean(1)
+        return (self.P[f][:, :, [self.h1, self.h2]], ids[owner],
+                (self.u[f] @ self.up).mean(1))
+
+
+AXIS = "xyz"
+
+
+class View:
+    """What a field picture of one frame draws: polygons with their cell ids, crack segments,
+    the axes (indices into xyz), whether the vertical axis is flipped (free surface on top
+    when up points to -axis) and the words for titles."""
+
+    def __init__(self, frame):
+        if frame.dim == 2:
+            self.polys = frame.polygons_2d()
+            self.segs = frame.crack_segments_2d()
+            self.idx, self.flip, self.where = (0, 1), False, ""
+        else:
+            self.polys = frame.section()
+            self.segs = frame.crack_section()
+            self.idx, self.flip = (frame.h1, frame.va), frame.s < 0
+            self.where = f"section {AXIS[frame.h2]} = {frame.section_at:.3g} m"
+        self.xlabel = f"{AXIS[self.idx[0]]} (m)"
+        self.ylabel = f"{AXIS[self.idx[1]]} (m)"
 
 
 # ----------------------------------------------------------------------------- drawing fields
@@ -381,12 +454,31 @@ def draw_polys(ax, polys, values, cmap, norm):
     return mappable
 
 
-def set_limits(ax, polys, xlabel, ylabel):
-    pts = np.concatenate([v.reshape(-1, 2) for v, _ in polys]) if polys else np.zeros((1, 2))
+def view_box(polys_list, frame, idx):
+    """(lo, hi) drawing limits covering the polygons of several pictures, padded by 2 %.
+    Fragments thrown far away would shrink the model to a dot: the limits stay within the
+    model's reference box enlarged by half its size on every side."""
+    pts = [v.reshape(-1, 2) for polys in polys_list for v, _ in polys]
+    pts = np.concatenate(pts) if pts else np.zeros((1, 2))
     lo, hi = pts.min(0), pts.max(0)
+    ref = frame.X[:, list(idx)]
+    rlo, rhi = ref.min(0), ref.max(0)
+    ext = rhi - rlo
+    lo, hi = np.maximum(lo, rlo - 0.5 * ext), np.minimum(hi, rhi + 0.5 * ext)
     pad = 0.02 * float(max(hi - lo)) if np.any(hi > lo) else 1.0
-    ax.set_xlim(lo[0] - pad, hi[0] + pad)
-    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    return lo - pad, hi + pad
+
+
+def box_aspect(box):
+    w, h = box[1] - box[0]
+    return float(np.clip(w / h if h > 0 else 1.0, 0.3, 4.0))
+
+
+def set_limits(ax, box, xlabel, ylabel, flip=False):
+    ax.set_xlim(box[0][0], box[1][0])
+    ax.set_ylim(box[0][1], box[1][1])
+    if flip:
+        ax.invert_yaxis()
     ax.set_aspect("equal")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
@@ -404,14 +496,6 @@ def draw_cracks(ax, segs, lw=0.5):
         ax.add_collection(LineCollection(segs, colors=CRACK_COLOR, linewidths=lw, alpha=0.9))
 
 
-def field_view(frame, y0):
-    """(polys, crack segments, xlabel, ylabel) of the view drawn for a frame: the whole
-    model in 2D, the vertical section y = y0 in 3D."""
-    if frame.dim == 2:
-        return frame.polygons_2d(), frame.crack_segments_2d(), "x (m)", "y (m)"
-    return frame.section(y0), frame.crack_section(y0), "x (m)", "z (m)"
-
-
 def cell_values(frame, name, scale=1.0):
     v = frame.cell(name)
     if v is None:
@@ -422,7 +506,7 @@ def cell_values(frame, name, scale=1.0):
     return v * scale
 
 
-def node_magnitude_per_cell(frame, polys_source="tets"):
+def node_magnitude_per_cell(frame):
     """Cell mean of the nodal displacement magnitude (m), per cell id."""
     g = frame.grid
     out = np.zeros(g.ncells)
@@ -434,19 +518,20 @@ def node_magnitude_per_cell(frame, polys_source="tets"):
     return out
 
 
-def model_centre_y(frame):
-    return 0.5 * (frame.X[:, 1].min() + frame.X[:, 1].max())
-
-
-def figsize_for(ncols, nrows, aspect, aw, cbar_each, cbar_shared, title_lines=1):
+def figsize_for(ncols, nrows, aspect, aw, cbar_each, cbar_shared, title_lines=1, suptitle=True):
     """Figure size (in) giving axes of width aw and the view's aspect, with room for the
     tick labels, titles and colour bars, so constrained_layout leaves little white space."""
     ah = aw / aspect
     if ah > 7.0:  # tall views: keep the figure on a screen
         aw, ah = aw * 7.0 / ah, 7.0
     w = ncols * (aw + 0.8 + (1.1 if cbar_each else 0.0)) + (1.2 if cbar_shared else 0.0)
-    h = nrows * (ah + 0.55 + 0.2 * title_lines) + 0.8
+    h = nrows * (ah + 0.55 + 0.2 * title_lines) + (0.8 if suptitle else 0.3)
     return w, h
+
+
+def aw_of(fig, ncols):
+    """Rough width (in) of one panel of a grid figure."""
+    return fig.get_figwidth() / ncols
 
 
 def grid_shape(n):
@@ -454,21 +539,12 @@ def grid_shape(n):
     return math.ceil(n / ncols), ncols
 
 
-def panel_size(frames, y0):
-    """Width/height ratio of the drawn view."""
-    polys, _, _, _ = field_view(frames[-1], y0)
-    if not polys:
-        return 1.0
-    pts = np.concatenate([v.reshape(-1, 2) for v, _ in polys])
-    w, h = np.ptp(pts, axis=0)
-    return float(np.clip(w / h if h > 0 else 1.0, 0.3, 4.0))
-
-
 def plot_field_grid(run, frames, quantity, out_dir, name, written):
     """A grid of damage or von Mises pictures at several output times."""
-    y0 = model_centre_y(frames[-1])
     nrows, ncols = grid_shape(len(frames))
-    aspect = panel_size(frames, y0)
+    views = [fr.view() for fr in frames]
+    box = view_box([v.polys for v in views], frames[-1], views[-1].idx)
+    aspect = box_aspect(box)
     shared = quantity == "damage"
     fig, axes = plt.subplots(nrows, ncols, squeeze=False, constrained_layout=True,
                              figsize=figsize_for(ncols, nrows, aspect, 3.6, not shared, shared))
@@ -478,7 +554,8 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
             ax.set_visible(False)
             continue
         fr = frames[k]
-        polys, segs, xl, yl = field_view(fr, y0)
+        v = views[k]
+        polys = v.polys
         if quantity == "damage":
             vals = cell_values(fr, "damage")
             norm = mcolors.Normalize(0, 1)
@@ -494,8 +571,8 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
             ax.set_title(fmt_time(fr.time))
             continue
         m = draw_polys(ax, polys, vals, cmap, norm)
-        draw_cracks(ax, segs, lw=0.3)
-        set_limits(ax, polys, xl, yl)
+        draw_cracks(ax, v.segs, lw=0.3)
+        set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
         ax.set_title(fmt_time(fr.time))
         if k % ncols:
             ax.set_ylabel("")
@@ -508,8 +585,9 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
             cb.set_label("von Mises (MPa)")
     if quantity == "damage" and mappable is not None:
         cb = colorbar(fig, mappable, ax=axes.ravel().tolist(), shrink=0.8)
-        cb.set_label("damage (broken fraction of interface area)")
-    where = "" if frames[-1].dim == 2 else f", vertical section y = {y0:.3g} m"
+        cb.set_label("damage" if nrows * aw_of(fig, ncols) / aspect < 4.5
+                     else "damage (broken fraction of interface area)")
+    where = f", {views[-1].where}" if views[-1].where else ""
     what = "Damage" if quantity == "damage" else "von Mises stress"
     fig.suptitle(f"{what}{where}: {run.label}{magnify_note(frames[-1])}\n"
                  "black lines: cracks (broken interfaces)")
@@ -522,12 +600,13 @@ def magnify_note(frame):
 
 def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
     """The last damage picture, large (or into a given axes for the comparison)."""
-    y0 = model_centre_y(frame)
-    polys, segs, xl, yl = field_view(frame, y0)
+    v = frame.view()
+    polys = v.polys
+    box = view_box([polys], frame, v.idx)
     own = ax is None
     if own:
-        aspect = panel_size([frame], y0)
-        fig, ax = plt.subplots(figsize=figsize_for(1, 1, aspect, 6.5, True, False, 2),
+        aspect = box_aspect(box)
+        fig, ax = plt.subplots(figsize=figsize_for(1, 1, aspect, 6.5, True, False, 2, False),
                                constrained_layout=True)
     vals = cell_values(frame, "damage")
     if vals is None or not polys:
@@ -535,9 +614,9 @@ def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
         m = None
     else:
         m = draw_polys(ax, polys, vals, DAMAGE_CMAP, mcolors.Normalize(0, 1))
-        draw_cracks(ax, segs, lw=0.6 if own else 0.4)
-        set_limits(ax, polys, xl, yl)
-    where = "" if frame.dim == 2 else f", section y = {y0:.3g} m"
+        draw_cracks(ax, v.segs, lw=0.6 if own else 0.4)
+        set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
+    where = f", {v.where}" if v.where else ""
     fd = run.summary.get("fracture_degree")
     fdt = f", fracture degree {100 * fd:.1f} %" if isinstance(fd, (int, float)) else ""
     if own:
@@ -551,57 +630,105 @@ def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
     return m
 
 
+def fragment_colors(ids):
+    """RGBA per cell: fragment 0 (the largest, usually the rock mass) light grey, the others
+    from a qualitative palette by id."""
+    pal = np.array(plt.get_cmap("tab20").colors)
+    pal = np.delete(pal, [14, 15], axis=0)        # no greys: grey is the rock mass
+    pal = np.concatenate([pal[0::2], pal[1::2]])  # strong colours first
+    rgba = np.ones((len(ids), 4))
+    rgba[:, :3] = pal[(np.maximum(ids, 1) - 1) % len(pal)]
+    rgba[ids == 0, :3] = 0.85
+    rgba[ids < 0, :3] = 1.0
+    return rgba
+
+
+def plot_fragments_final(run, frame, out_dir, written):
+    """The blocks of the last output coloured by fragment (needs the fragment_id array)."""
+    fid = frame.cell("fragment_id")
+    if fid is None:
+        return None
+    fid = np.asarray(fid).astype(np.int64)
+    v = frame.view()
+    polys = v.polys
+    if not polys:
+        return None
+    box = view_box([polys], frame, v.idx)
+    fig, ax = plt.subplots(figsize=figsize_for(1, 1, box_aspect(box), 6.5, False, False, 2, False),
+                           constrained_layout=True)
+    rgba = fragment_colors(fid)
+    for verts, ids in polys:
+        ax.add_collection(PolyCollection(verts, facecolors=rgba[ids], edgecolors=rgba[ids],
+                                         linewidths=0.15))
+    draw_cracks(ax, v.segs, lw=0.3)
+    set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
+    n = int(np.unique(fid[fid >= 0]).size)
+    where = f", {v.where}" if v.where else ""
+    ax.set_title(f"Fragments at {fmt_time(frame.time)}{where}: {run.label}{magnify_note(frame)}\n"
+                 f"{n} fragments; grey: the largest (the rock mass), colours: the others")
+    return save(fig, out_dir, "fragments_final.png", written)
+
+
+def up_words(frame):
+    """How the free-surface normal is named in titles: 'vertical' for +z, else the vector."""
+    if np.allclose(frame.up, (0, 0, 1)):
+        return "vertical displacement u_z", "top view (from +z)"
+    n = ", ".join(f"{c:g}" for c in np.round(frame.up, 3))
+    return f"displacement along up = ({n})", f"view of the free surface (up = ({n}))"
+
+
 def plot_3d_views(run, frame, out_dir, written):
-    """top_view.png (damage, vertical displacement) and section.png (damage, |u|)."""
+    """top_view.png (damage, displacement out of the free surface) and section.png (damage,
+    |u|). 'Top' is the free surface: the case's analysis.up, +z by default."""
     names = []
+    disp_words, view_words = up_words(frame)
+    h1, h2 = AXIS[frame.h1], AXIS[frame.h2]
     top = frame.top_faces()
     if top is not None and len(top[0]):
-        verts, ids, uz = top
+        verts, ids, un = top
         polys = [(verts, ids)]
-        pts = verts.reshape(-1, 2)
-        w, h = np.ptp(pts, axis=0)
-        aspect = float(np.clip(w / h if h > 0 else 1, 0.3, 4))
-        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, aspect, 4.6, True, False),
+        box = view_box([polys], frame, (frame.h1, frame.h2))
+        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, box_aspect(box), 4.6, True, False),
                                  constrained_layout=True)
         dmg = cell_values(frame, "damage")
         if dmg is not None:
             m = draw_polys(axes[0], polys, dmg, DAMAGE_CMAP, mcolors.Normalize(0, 1))
             colorbar(fig, m, ax=axes[0], shrink=0.85).set_label("damage")
-        set_limits(axes[0], polys, "x (m)", "y (m)")
-        axes[0].set_title("Damage of the upward-facing surface")
-        uzmm = uz * 1e3
-        lim = float(np.nanpercentile(np.abs(uzmm), 98)) or 1.0
-        pc = PolyCollection(verts, array=uzmm, cmap="RdBu_r", norm=mcolors.Normalize(-lim, lim),
+        set_limits(axes[0], box, f"{h1} (m)", f"{h2} (m)")
+        axes[0].set_title("Damage of the faces looking up")
+        unmm = un * 1e3
+        lim = float(np.nanpercentile(np.abs(unmm), 98)) or 1.0
+        pc = PolyCollection(verts, array=unmm, cmap="RdBu_r", norm=mcolors.Normalize(-lim, lim),
                             edgecolors="face", linewidths=0.15)
         axes[1].add_collection(pc)
-        colorbar(fig, pc, ax=axes[1], shrink=0.85, extend="both").set_label("vertical displacement u_z (mm)")
-        set_limits(axes[1], polys, "x (m)", "y (m)")
-        axes[1].set_title("Vertical displacement u_z")
-        fig.suptitle(f"Top view at {fmt_time(frame.time)}: {run.label}{magnify_note(frame)}")
+        colorbar(fig, pc, ax=axes[1], shrink=0.85, extend="both").set_label(f"{disp_words} (mm)")
+        set_limits(axes[1], box, f"{h1} (m)", f"{h2} (m)")
+        axes[1].set_title(disp_words[0].upper() + disp_words[1:])
+        fig.suptitle(f"{view_words[0].upper() + view_words[1:]} at {fmt_time(frame.time)}: "
+                     f"{run.label}{magnify_note(frame)}")
         names.append(save(fig, out_dir, "top_view.png", written))
-    y0 = model_centre_y(frame)
-    polys = frame.section(y0)
-    if polys:
-        segs = frame.crack_section(y0)
-        aspect = panel_size([frame], y0)
-        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, aspect, 4.6, True, False),
+    v = frame.view()
+    if v.polys:
+        box = view_box([v.polys], frame, v.idx)
+        fig, axes = plt.subplots(1, 2, figsize=figsize_for(2, 1, box_aspect(box), 4.6, True, False),
                                  constrained_layout=True)
         dmg = cell_values(frame, "damage")
         if dmg is not None:
-            m = draw_polys(axes[0], polys, dmg, DAMAGE_CMAP, mcolors.Normalize(0, 1))
+            m = draw_polys(axes[0], v.polys, dmg, DAMAGE_CMAP, mcolors.Normalize(0, 1))
             colorbar(fig, m, ax=axes[0], shrink=0.85).set_label("damage")
-        draw_cracks(axes[0], segs, lw=0.5)
-        set_limits(axes[0], polys, "x (m)", "z (m)")
+        draw_cracks(axes[0], v.segs, lw=0.5)
+        set_limits(axes[0], box, v.xlabel, v.ylabel, v.flip)
         axes[0].set_title("Damage (black lines: cracks)")
         umag = node_magnitude_per_cell(frame) * 1e3
-        vis = np.concatenate([umag[ids] for _, ids in polys])
+        vis = np.concatenate([umag[ids] for _, ids in v.polys])
         top = float(np.nanpercentile(vis, 98)) or 1.0
-        m = draw_polys(axes[1], polys, umag, "viridis", mcolors.Normalize(0, top))
-        colorbar(fig, m, ax=axes[1], shrink=0.85, extend="max").set_label("displacement magnitude |u| (mm)")
-        set_limits(axes[1], polys, "x (m)", "z (m)")
+        m = draw_polys(axes[1], v.polys, umag, "viridis", mcolors.Normalize(0, top))
+        colorbar(fig, m, ax=axes[1], shrink=0.85, extend="max").set_label(
+            "displacement magnitude |u| (mm)")
+        set_limits(axes[1], box, v.xlabel, v.ylabel, v.flip)
         axes[1].set_title("Displacement magnitude")
-        fig.suptitle(f"Vertical section y = {y0:.3g} m at {fmt_time(frame.time)}: "
-                     f"{run.label}{magnify_note(frame)}")
+        fig.suptitle(f"Section {h2} = {frame.section_at:.3g} m (through the model centre, free "
+                     f"surface on top) at {fmt_time(frame.time)}: {run.label}{magnify_note(frame)}")
         names.append(save(fig, out_dir, "section.png", written))
     return names
 
@@ -736,6 +863,9 @@ def plot_error(ax, t, err, color, label=None):
     e = np.abs(np.asarray(err, float))
     e = np.where(e > 0, e, np.nan)
     ax.semilogy(t, e, color=color, lw=1.2, label=label)
+    # Plain "1e-05" labels: no mathtext (its parser costs a noticeable start-up time).
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:.0e}"))
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
 def plot_energy(runs, out_dir, written):
@@ -774,7 +904,8 @@ def plot_energy(runs, out_dir, written):
         fig.suptitle(f"Energy balance: {r.label}")
         return save(fig, out_dir, "energy.png", written)
     groups = [("kinetic", ["kinetic"]), ("strain (blocks + springs)", ["block_strain", "spring_strain"]),
-              ("work input (external + gravity + explosive)", ["external_work", "gravity_work", "explosive_work"]),
+              ("work input (external + gravity + explosive)",
+               ["external_work", "gravity_work", "explosive_work"]),
               ("damping + absorbed", ["damping"]), ("fracture dissipation", ["fracture"])]
     vmax = 1.0
     series = {}
@@ -828,20 +959,15 @@ def grading_data(run):
                     return np.array(a, float), np.array(b, float), "summary.json"
                 except (TypeError, ValueError):
                     pass
-    gp = os.path.join(run.dir, "grading.csv")
-    g = read_csv(gp) if os.path.isfile(gp) else None
-    if g is None and os.path.isfile(gp):
-        # grading.csv need not have a time column: read it plainly.
-        try:
-            arr = np.genfromtxt(gp, delimiter=",", names=True)
-            g = {n: np.atleast_1d(arr[n]) for n in arr.dtype.names}
-        except Exception:
-            g = None
+    g = read_table(os.path.join(run.dir, "grading.csv"))
     if g:
         sc = next((k for k in g if "size" in k.lower() or "l_bc" in k.lower()), None)
         pc = next((k for k in g if "pass" in k.lower()), None)
         if sc and pc:
-            return np.asarray(g[sc], float), np.asarray(g[pc], float), "grading.csv"
+            size, passing = np.asarray(g[sc], float), np.asarray(g[pc], float)
+            ok = np.isfinite(size) & np.isfinite(passing)
+            if ok.any():
+                return size[ok], passing[ok], "grading.csv"
     pts = [(s.get(f"d{x}_m"), x) for x in range(10, 100, 10)]
     pts = [(float(v), x) for v, x in pts if isinstance(v, (int, float)) and math.isfinite(v)]
     if len(pts) >= 2:
@@ -849,16 +975,16 @@ def grading_data(run):
     return None
 
 
-def plot_grading(runs, out_dir, written):
+def plot_grading(runs, out_dir, written, notes):
     data = [(r, grading_data(r)) for r in runs]
     data = [(r, d) for r, d in data if d is not None]
+    why = "no grading data (no grading curve or d10..d90 in summary.json, no grading.csv)"
+    if not data:
+        notes.append(f"{why}: grading.png skipped.")
+        return None
     for r in runs:
         if all(r is not rr for rr, _ in data):
-            r.notes.append("No grading data (no grading curve or d10..d90 in summary.json, no "
-                           "grading.csv): " + ("left out of grading.png." if len(runs) > 1
-                                               else "grading.png skipped."))
-    if not data:
-        return None
+            r.notes.append(f"{why}: left out of grading.png.")
     fig, ax = plt.subplots(figsize=(8.5, 5.5), constrained_layout=True)
     colors = run_colors(len(data))
     allsize = np.concatenate([d[0] for _, d in data])
@@ -866,6 +992,10 @@ def plot_grading(runs, out_dir, written):
     for i, (r, (size, passing, src)) in enumerate(data):
         order = np.argsort(size, kind="stable")
         lab = r.label if len(data) > 1 else f"grading curve ({src})"
+        if len(data) > 1:  # the d values go in the legend: labels on the plot would collide
+            dv = [(k[:3], r.summary.get(k)) for k in ("d40_m", "d80_m")]
+            dv = [f"{n} {v:.3g} m" for n, v in dv if isinstance(v, (int, float)) and math.isfinite(v)]
+            lab += f" ({', '.join(dv)})" if dv else ""
         ax.plot(size[order], passing[order], color=colors[i], lw=1.8, label=lab,
                 marker="o" if size.size <= 60 else None, ms=3)
         for key, pct, ls in (("d40_m", 40, "--"), ("d80_m", 80, ":")):
@@ -873,12 +1003,16 @@ def plot_grading(runs, out_dir, written):
             if isinstance(v, (int, float)) and math.isfinite(v) and v > 0:
                 ax.plot([v, v], [0, pct], color=colors[i], ls=ls, lw=1)
                 ax.plot([v], [pct], "o", color=colors[i], ms=6, mfc="white")
-                ax.annotate(f"{key[:3]} = {v:.3g} m", (v, pct), textcoords="offset points",
-                            xytext=(7, -13), fontsize=9, color=colors[i],
-                            bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+                if len(data) == 1:
+                    ax.annotate(f"{key[:3]} = {v:.3g} m", (v, pct), textcoords="offset points",
+                                xytext=(7, -13), fontsize=9, color=colors[i],
+                                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none",
+                                          alpha=0.8))
     if allsize.size and allsize.max() / allsize.min() > 20:
         ax.set_xscale("log")
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
         ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.set_ylim(0, 102)
     ax.set_xlabel("fragment size L_bc (m)")
     ax.set_ylabel("cumulative volume passing (%)")
@@ -901,12 +1035,15 @@ KNOWN = [
     ("fragments", "fragments", "", None, None),
     ("d40_m", "d40 (40 % passing)", "m", 1, "{:.4g}"),
     ("d80_m", "d80 (80 % passing)", "m", 1, "{:.4g}"),
-] + [(f"d{x}_m", f"d{x} ({x} % passing)", "m", 1, "{:.4g}") for x in (10, 20, 30, 50, 60, 70, 90)] + [
+    ("d10_90", "d10, d20, ..., d90", "m", 1, "{:.3g}"),  # the nine d_x keys in one row
+] + [
+    ("main_fragment_volume", "main rock mass volume", "m³", 1, "{:.4g}"),
     ("funnel_depth_m", "funnel depth", "m", 1, "{:.4g}"),
-    ("funnel_l_x_m", "funnel extent l_x", "m", 1, "{:.4g}"),
-    ("funnel_l_y_m", "funnel extent l_y", "m", 1, "{:.4g}"),
+    ("funnel_lx_m", "funnel extent l_x", "m", 1, "{:.4g}"),
+    ("funnel_ly_m", "funnel extent l_y", "m", 1, "{:.4g}"),
     ("funnel_axial_ratio", "funnel axial ratio e = l_y / l_x", "", 1, "{:.3g}"),
-    ("funnel_footage_m", "footage", "m", 1, "{:.4g}"),
+    ("footage_m", "footage", "m", 1, "{:.4g}"),
+    ("funnel_broken_volume", "funnel broken volume", "m³", 1, "{:.4g}"),
     ("energy_error", "energy balance error (relative)", "", 1, "{:.2e}"),
     ("kinetic_energy", "kinetic energy at the end", "J", 1, "{:.4g}"),
     ("explosive_work", "explosive work", "J", 1, "{:.4g}"),
@@ -974,23 +1111,30 @@ def format_value(v, sc, f):
         x = v * (sc or 1)
         return (f or "{:.4g}").format(x)
     if isinstance(v, list):
-        return ", ".join(format_value(x, sc, f) for x in v)
+        return ", ".join(format_value(x, sc, f) if x is not None else "–" for x in v)
     return str(v)
 
 
 def summary_rows(runs):
     """[(label, unit, [value per run])] in a fixed order: known keys first, then the rest."""
     flats = [flatten(r.summary) for r in runs]
+    dkeys = [f"d{x}_m" for x in range(10, 100, 10)]
+    for f in flats:  # d10..d90 make one row (d40 and d80 keep their own rows too)
+        if sum(k in f for k in dkeys) >= 3:
+            f["d10_90"] = [f.get(k) for k in dkeys]
+            for k in dkeys:
+                if k not in ("d40_m", "d80_m"):
+                    f.pop(k, None)
     keys = [k for k, *_ in KNOWN if any(k in f for f in flats)]
     rest = []
     for f in flats:
         for k in f:
             if k not in keys and k not in rest and k != "title":
                 rest.append(k)
-    quality = [k for k in rest if k.startswith(("funnel", "grading", "fragment"))]
+    quality = [k for k in rest if k.startswith(("funnel", "grading", "fragment", "footage"))]
     rest = [k for k in rest if k not in quality]
     known = [k for k, *_ in KNOWN]
-    last_quality = known.index("funnel_footage_m")
+    last_quality = known.index("funnel_broken_volume")
     pos = sum(1 for k in keys if known.index(k) <= last_quality)
     keys = keys[:pos] + quality + keys[pos:]
     rows = []
@@ -1036,8 +1180,12 @@ CAPTIONS = {
     "von_mises_maps.png": "von Mises stress at the same output times (each picture has its own "
                           "colour scale, clipped at its 99.5th percentile).",
     "damage_final.png": "Damage at the last output time, with the cracks.",
-    "top_view.png": "Top view (faces looking up): damage and vertical displacement.",
-    "section.png": "Vertical section through the model centre: damage with crack traces, and "
+    "fragments_final.png": "Fragments at the last output time: blocks connected through intact "
+                           "spring points share a colour; the largest fragment is grey.",
+    "top_view.png": "View of the free surface (the faces looking up, 'up' being the case's "
+                    "analysis.up, +z by default): damage and displacement along up.",
+    "section.png": "Section through the model centre containing the up direction, free surface "
+                   "on top: damage with crack traces, and "
                    "displacement magnitude (colour scale clipped at its 98th percentile).",
     "damage_final_compare.png": "Damage at the last output time of each run, side by side.",
 }
@@ -1073,7 +1221,8 @@ def write_documents(runs, out_dir, pictures, notes):
     for r in runs:
         rel = r.dir
         own = os.path.join(r.dir, "report", "index.html")
-        run_lines.append((r.label, rel, os.path.relpath(own, out_dir) if multi and os.path.isfile(own) else None))
+        link = os.path.relpath(own, out_dir) if multi and os.path.isfile(own) else None
+        run_lines.append((r.label, rel, link))
     warn = [f"{r.label}: status '{r.summary.get('status')}'"
             + (f" ({r.summary.get('diagnosis')})" if r.summary.get("diagnosis") else "")
             for r in runs if r.summary.get("status") not in (None, "finished")]
@@ -1148,39 +1297,68 @@ class Failures:
             return None
 
 
+def load_frames(run, indices, magnify, notes):
+    """FieldFrames of the given outputs; unreadable files are noted and left out."""
+    frames = []
+    for i in indices:
+        try:
+            fr = FieldFrame(run, i, magnify)
+            fr.grid.types, fr.grid.cell_array("damage")  # decode now: fail here, not mid-plot
+            frames.append(fr)
+        except (VtuError, OSError) as ex:
+            notes.append(f"field output skipped: {ex}")
+    return frames
+
+
+def last_frame(run, magnify, notes):
+    """The last readable field output (None if there is none)."""
+    for i in reversed(range(len(run.fields))):
+        got = load_frames(run, [i], magnify, notes)
+        if got:
+            return got[0]
+    return None
+
+
 def field_pictures(run, out_dir, written, notes, args, failures):
     if not run.fields:
-        notes.append(f"{run.label}: no field output (fields.pvd): no field pictures.")
+        notes.append("no field output (fields.pvd): no field pictures.")
         return None
-    sel = choose_frames(run.fields, args.frames)
-    frames = [FieldFrame(run, i, args.magnify) for i in sel]
-    last = frames[-1] if sel[-1] == len(run.fields) - 1 else FieldFrame(run, len(run.fields) - 1, args.magnify)
+    frames = load_frames(run, choose_frames(run.fields, args.frames), args.magnify, notes)
+    last = last_frame(run, args.magnify, [])
+    if not frames or last is None:
+        notes.append("no readable field output: no field pictures.")
+        return None
+    if last.time > frames[-1].time:
+        frames = (frames + [last])[-args.frames:]
     failures.run("damage_maps.png", notes, plot_field_grid, run, frames, "damage", out_dir,
                  "damage_maps.png", written)
     failures.run("von_mises_maps.png", notes, plot_field_grid, run, frames, "von_mises", out_dir,
                  "von_mises_maps.png", written)
     failures.run("damage_final.png", notes, plot_damage_final, run, last, out_dir, "damage_final.png",
                  written)
+    failures.run("fragments_final.png", notes, plot_fragments_final, run, last, out_dir, written)
     if last.dim == 3:
         failures.run("3D views", notes, plot_3d_views, run, last, out_dir, written)
     if not run.cracks:
-        notes.append(f"{run.label}: no crack output (cracks.pvd): cracks not drawn.")
+        notes.append("no crack output (cracks.pvd): cracks not drawn.")
     return last
 
 
 def compare_damage(runs, out_dir, written, notes, args):
     frames = []
     for r in runs:
-        if r.fields:
-            frames.append((r, FieldFrame(r, len(r.fields) - 1, args.magnify)))
+        fr = last_frame(r, args.magnify, r.notes) if r.fields else None
+        if fr is not None:
+            frames.append((r, fr))
         else:
-            notes.append(f"{r.label}: no field output: left out of damage_final_compare.png.")
+            r.notes.append("no readable field output: left out of damage_final_compare.png.")
     if not frames:
         return None
     n = len(frames)
     ncols = min(n, 3)
     nrows = math.ceil(n / ncols)
-    aspect = panel_size([frames[0][1]], model_centre_y(frames[0][1]))
+    f0 = frames[0][1]
+    aspect = box_aspect(view_box([f0.view().polys], f0, f0.view().idx))
     fig, axes = plt.subplots(nrows, ncols, figsize=figsize_for(ncols, nrows, aspect, 4.4, False, True, 3),
                              squeeze=False, constrained_layout=True)
     m = None
@@ -1251,26 +1429,22 @@ def main(argv=None):
     failures = Failures()
     for r in runs:
         if not r.monitors:
-            notes.append(f"{r.label}: no monitor data (monitors.csv).")
+            r.notes.append("no monitor data (monitors.csv).")
         if r.fracture is None:
-            notes.append(f"{r.label}: no fracture history (fracture.csv).")
+            r.notes.append("no fracture history (fracture.csv).")
         if r.energy is None:
-            notes.append(f"{r.label}: no energy history (energy.csv).")
+            r.notes.append("no energy history (energy.csv).")
     failures.run("monitors.png", notes, plot_monitors, runs, out_dir, written)
     failures.run("fracture.png", notes, plot_fracture, runs, out_dir, written)
     failures.run("energy.png", notes, plot_energy, runs, out_dir, written)
-    failures.run("grading.png", notes, plot_grading, runs, out_dir, written)
+    failures.run("grading.png", notes, plot_grading, runs, out_dir, written, notes)
     if multi:
         failures.run("damage_final_compare.png", notes, compare_damage, runs, out_dir, written, notes, args)
     else:
-        try:
-            field_pictures(runs[0], out_dir, written, notes, args, failures)
-        except (VtuError, OSError) as ex:
-            failures.count += 1
-            notes.append(f"field pictures failed: {ex}")
-            print(f"cdem_report: {ex}", file=sys.stderr)
-    for r in runs:
-        notes.extend(n if n.startswith(r.label) or not multi else f"{r.label}: {n}" for n in r.notes)
+        failures.run("field pictures", runs[0].notes, field_pictures, runs[0], out_dir, written,
+                     runs[0].notes, args, failures)
+    for r in runs:  # per-run notes, named by their run when there are several
+        notes.extend(f"{r.label}: {n}" if multi else n for n in r.notes)
     order = list(CAPTIONS)
     pictures = sorted(dict.fromkeys(written), key=lambda p: order.index(p) if p in order else 99)
     write_documents(runs, out_dir, pictures, notes)

@@ -182,16 +182,23 @@ def read_vtu(path):
     def binary_block(data, pos):
         """Decodes one binary (appended or base64-decoded) array starting at data[pos:]."""
         hsize = hdt.itemsize
+
+        def need(end):
+            if pos < 0 or end > len(data):
+                raise VtuError(f"{path}: the file is truncated (data end at byte {end} of "
+                               f"{len(data)} in the binary section)")
+
+        need(pos + hsize)
+        first = int(np.frombuffer(data, hdt, 1, pos)[0])
         if not compressed:
-            (nbytes,) = np.frombuffer(data, hdt, 1, pos)
-            return bytes(data[pos + hsize: pos + hsize + int(nbytes)])
-        (nblocks,) = np.frombuffer(data, hdt, 1, pos)
-        nblocks = int(nblocks)
-        head = np.frombuffer(data, hdt, 3 + nblocks, pos).astype(np.int64)
-        sizes = head[3:]
+            need(pos + hsize + first)
+            return bytes(data[pos + hsize: pos + hsize + first])
+        need(pos + hsize * (3 + first))
+        head = np.frombuffer(data, hdt, 3 + first, pos).astype(np.int64)
+        q = pos + hsize * (3 + first)
+        need(q + int(head[3:].sum()))
         out = []
-        q = pos + hsize * (3 + nblocks)
-        for s in sizes:
+        for s in head[3:]:
             out.append(zlib.decompress(data[q:q + int(s)]))
             q += int(s)
         return b"".join(out)

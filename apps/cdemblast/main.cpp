@@ -17,6 +17,7 @@
 #include "cdem/explosive/charges.hpp"
 #include "cdem/analysis/monitors.hpp"
 #include "cdem/io/case.hpp"
+#include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
 #include "cdem/solver/simulation.hpp"
 
@@ -100,13 +101,14 @@ int main(int argc, char** argv) {
   run->add_option("case", case_path, "Case file (TOML)")->required();
   run->add_option("--out,-o", out_dir, "Output directory (default: runs/<case name>)");
   run->add_option("--threads,-t", threads, "OpenMP threads (default: the case's, else all cores)")
-      ->check(CLI::NonNegativeNumber);
-  run->add_option("--set", sets, "Override a case key: --set simulation.end_time=1e-3");
+      ->check(CLI::Range(0, 4096).description("an integer >= 0"));
+  run->add_option("--set", sets, "Override a case key: --set simulation.end_time=1e-3")
+      ->allow_extra_args(false);
   run->add_flag("--quiet,-q", quiet, "No progress output");
 
   auto* check = app.add_subcommand("check", "Validate a case, mesh it, print the model size and dt");
   check->add_option("case", case_path, "Case file (TOML)")->required();
-  check->add_option("--set", sets, "Override a case key");
+  check->add_option("--set", sets, "Override a case key")->allow_extra_args(false);
 
   std::vector<std::string> report_runs;
   std::string report_out;
@@ -114,15 +116,25 @@ int main(int argc, char** argv) {
   report->add_option("runs", report_runs, "Run directories (several: overlaid for comparison)")->required();
   report->add_option("--out,-o", report_out, "Output directory (default: RUN/report)");
 
+  cdem::BenchOptions bench_opt;
+  auto* bench = app.add_subcommand("bench", "Time the step on a 3D tet model: throughput, kernel split, memory, scaling");
+  bench->add_option("--blocks", bench_opt.blocks, "Approximate number of blocks (default 30000)")
+      ->check(CLI::PositiveNumber);
+  bench->add_option("--steps", bench_opt.steps, "Timed steps (default 200)")->check(CLI::PositiveNumber);
+  bench->add_option("--threads", bench_opt.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  bench->add_flag("--json", bench_opt.json, "Print one JSON object");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;  // help and version: 0; any command-line error: 2, like input errors
   }
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   try {
     if (*check) return cmd_check(case_path, sets);
     if (*report) return cmd_report(report_runs, report_out);
+    if (*bench) return cdem::run_bench(bench_opt);
     const cdem::Case c = cdem::load_case(case_path, sets);
     if (out_dir.empty()) out_dir = (std::filesystem::path("runs") / std::filesystem::path(case_path).stem()).string();
     cdem::RunOptions opt;

@@ -244,6 +244,8 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
   if (!fs::exists(path)) throw InputError(fmt::format("cannot open case file '{}': no such file", path));
+  if (fs::is_directory(path))
+    throw InputError(fmt::format("cannot open case file '{}': it is a directory", path));
   toml::value root;
   try {
     root = toml::parse(path);
@@ -301,6 +303,8 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
   c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
   c.max_steps = sim->integer("max_steps", 0);
+  if (c.max_steps < 0)
+    throw InputError(fmt::format("{}: expected an integer >= 0 (0: no limit), got {}", sim->where("max_steps"), c.max_steps));
   c.gravity = sim->vec("gravity", {});
 
   // ---- block materials ----
@@ -320,7 +324,8 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     // An explosive region's density defaults to the explosive's (filled in below).
     m.density = m.explosive.empty() ? t.positive("density") : t.positive("density", -1.0);
     m.youngs = m.explosive.empty() ? t.positive("youngs_modulus") : t.positive("youngs_modulus", 1e9);
-    m.poisson = t.number("poisson_ratio", m.explosive.empty() ? -1.0 : 0.25);
+    if (m.explosive.empty() && !t.has("poisson_ratio")) t.fail("poisson_ratio", "a number in (-1, 0.5)");
+    m.poisson = t.number("poisson_ratio", 0.25);
     if (!(m.poisson > -1.0 && m.poisson < 0.5))
       throw InputError(fmt::format("{}: expected a Poisson ratio in (-1, 0.5), got {}",
                                    t.where("poisson_ratio"), m.poisson));
@@ -345,19 +350,18 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     im.law = law == "mohr_coulomb" ? InterfaceLaw::MohrCoulomb
              : law == "fracture_energy" ? InterfaceLaw::FractureEnergy : InterfaceLaw::Elastic;
     if (im.law != InterfaceLaw::Elastic) {
-      im.tensile_strength = t.non_negative("tensile_strength", -1);
       if (!t.has("tensile_strength")) t.fail("tensile_strength", "a number >= 0 (Pa)");
-      im.cohesion = t.non_negative("cohesion", 0);
+      im.tensile_strength = t.non_negative("tensile_strength", 0.0);
       if (!t.has("cohesion")) t.fail("cohesion", "a number >= 0 (Pa)");
+      im.cohesion = t.non_negative("cohesion", 0.0);
     }
     im.friction_deg = t.number("friction_angle", 0.0);
     im.residual_friction_deg = t.number("residual_friction_angle", -1.0);
     im.dilation_deg = t.number("dilation_angle", 0.0);
-    for (const char* k : {"friction_angle", "dilation_angle"})
+    for (const char* k : {"friction_angle", "dilation_angle", "residual_friction_angle"})
       if (t.has(k) && (t.number(k) < 0 || t.number(k) >= 90))
-        throw InputError(fmt::format("{}: expected an angle in degrees in [0, 90)", t.where(k)));
-    if (t.has("residual_friction_angle") && (im.residual_friction_deg < 0 || im.residual_friction_deg >= 90))
-      throw InputError(fmt::format("{}: expected an angle in degrees in [0, 90)", t.where("residual_friction_angle")));
+        throw InputError(fmt::format("{}: expected an angle in degrees in [0, 90), got {}", t.where(k),
+                                     t.number(k)));
     if (im.law == InterfaceLaw::FractureEnergy) {
       im.gt = t.positive("tensile_fracture_energy");
       im.gs = t.positive("shear_fracture_energy");
@@ -561,8 +565,8 @@ std::string resolved_case_toml(const Case& c) {
     std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     for (const auto& it : items) o += it.second;
   }
-  o += fmt::format("\n[analysis]\nup = {}\ndamage_threshold = {:.17g}\n", vec_str(c.analysis.up),
-                   c.analysis.damage_threshold);
+  o += fmt::format("\n[analysis]\ndamage_threshold = {:.17g}\n", c.analysis.damage_threshold);
+  if (norm(c.analysis.up) > 0) o += fmt::format("up = {}\n", vec_str(c.analysis.up));
   if (c.analysis.surface_level_set) o += fmt::format("surface_level = {:.17g}\n", c.analysis.surface_level);
   if (!c.analysis.main_faces.empty()) {
     o += "main_faces = [";

@@ -113,7 +113,7 @@ struct Case {
   int threads = 0;          // 0: all cores
   double output_interval = 0;           // field output (VTU) period, s (0: only the end)
   std::vector<double> output_times;     // explicit field output times (added to the period)
-  double history_interval = 0;          // monitors, energy, fracture degree, s (0: ~200 samples)
+  double history_interval = 0;          // monitors, energy, fracture degree, s (default end_time/200; 0: every step)
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   std::int64_t max_steps = 0;           // 0: unlimited

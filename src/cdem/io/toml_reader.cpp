@@ -97,11 +97,12 @@ std::string TomlTable::string(const std::string& key, const std::string& dflt) c
 }
 std::string TomlTable::choice(const std::string& key, const std::vector<std::string>& allowed,
                               const std::string& dflt) const {
-  const std::string s = has(key) || dflt.empty() ? string(key) : dflt;
-  for (const auto& a : allowed)
-    if (a == s) return s;
   std::string list;
   for (const auto& a : allowed) list += (list.empty() ? "'" : ", '") + a + "'";
+  if (!has(key) && dflt.empty()) fail(key, "one of " + list);
+  const std::string s = has(key) ? string(key) : dflt;
+  for (const auto& a : allowed)
+    if (a == s) return s;
   throw InputError(fmt::format("{}: '{}' is not one of {}", where(key), s, list));
 }
 std::vector<double> TomlTable::numbers(const std::string& key) const {

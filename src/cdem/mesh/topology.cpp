@@ -226,8 +226,20 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   // Interface material lookup by region pair.
   m.iface_materials = iface_materials;
   int default_iface = -1;
-  for (std::size_t k = 0; k < iface_materials.size(); ++k)
-    if (iface_materials[k].is_default || iface_materials.size() == 1) default_iface = static_cast<int>(k);
+  for (std::size_t k = 0; k < iface_materials.size(); ++k) {
+    const auto& im = iface_materials[k];
+    for (const auto& pr : im.pairs)
+      for (const auto& r : {pr.first, pr.second})
+        if (mesh.region_index(r) < 0)
+          throw InputError(fmt::format("{}: interface '{}': region '{}' in 'pairs' is not in the mesh "
+                                       "(its regions are {})",
+                                       where, im.name, r, join_names(mesh.region_names)));
+    if (im.is_default && default_iface >= 0 && iface_materials[default_iface].is_default)
+      throw InputError(fmt::format("{}: interfaces '{}' and '{}' are both marked default = true; "
+                                   "only one can be",
+                                   where, iface_materials[default_iface].name, im.name));
+    if (im.is_default || iface_materials.size() == 1) default_iface = static_cast<int>(k);
+  }
   // Explosive blocks are joined to everything by unbreakable interfaces (SPEC 3).
   int explosive_iface = -1;
   auto iface_for = [&](std::int32_t ba, std::int32_t bb) -> int {

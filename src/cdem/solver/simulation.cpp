@@ -17,6 +17,9 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
   bc_ = prepare_boundaries(m_, c);
   setup_damping_zones(c);
+  for (const auto& f : c.analysis.main_faces)
+    if (!m_.facet_set(f))
+      throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));
   setup_initial_stress(c);
   stable_ = stable_time_step(m_, c.dt_safety);
   dt_ = stable_.dt;
@@ -47,12 +50,18 @@ void Simulation::limit_dt(double dt_max, const std::string& what) {
 }
 
 void Simulation::setup_damping_zones(const Case& c) {
-  for (const auto& z : c.damping_zones) {
+  for (std::size_t zi = 0; zi < c.damping_zones.size(); ++zi) {
+    const auto& z = c.damping_zones[zi];
     int region = -1;
-    for (std::size_t r = 0; r < m_.region_names.size(); ++r)
+    std::string names;
+    for (std::size_t r = 0; r < m_.region_names.size(); ++r) {
       if (m_.region_names[r] == z.region) region = static_cast<int>(r);
+      names += (names.empty() ? "'" : ", '") + m_.region_names[r] + "'";
+    }
     if (region < 0)
-      throw InputError(fmt::format("{}: damping_zone: region '{}' is not in the mesh", c.path, z.region));
+      throw InputError(fmt::format("{}: key 'damping_zone[{}].region': region '{}' is not in the "
+                                   "mesh (its regions are {})",
+                                   c.path, zi, z.region, names));
     // Inner edge: vertices the zone shares with blocks outside it.
     std::vector<char> in_zone(m_.n_blocks(), 0), out_vertex, in_vertex;
     std::int32_t nv = 0;

@@ -1,0 +1,689 @@
+#include "cdem/solver/bench.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "cdem/core/polar.hpp"
+#include "cdem/explosive/charges.hpp"
+#include "cdem/explosive/explosive_library.hpp"
+#include "cdem/mesh/element_geometry.hpp"
+#include "cdem/mesh/topology.hpp"
+#include "cdem/physics/block_forces.hpp"
+#include "cdem/physics/boundaries.hpp"
+#include "cdem/physics/integrate.hpp"
+#include "cdem/physics/springs.hpp"
+#include "cdem/solver/simulation.hpp"
+
+namespace cdem {
+namespace bench {
+namespace {
+
+// Boundary facets of an axis-aligned box mesh: every element face (edge) used by one element
+// only, put in the set of the box side all its vertices lie on.
+void add_box_face_sets(Mesh& mesh) {
+  struct Rec {
+    std::array<std::int32_t, 3> key;
+    Facet facet;
+  };
+  std::vector<Rec> recs;
+  recs.reserve(mesh.num_elements() * 4);
+  for (std::size_t e = 0; e < mesh.num_elements(); ++e) {
+    const LocalFaces lf = local_faces(mesh.elem_type[e]);
+    for (int k = 0; k < lf.count; ++k) {
+      Rec r;
+      for (int i = 0; i < lf.nodes_per_face; ++i) r.facet.v[i] = mesh.elem_vertices[e][lf.f[k][i]];
+      r.key = r.facet.v;
+      std::sort(r.key.begin(), r.key.begin() + lf.nodes_per_face);
+      recs.push_back(r);
+    }
+  }
+  std::sort(recs.begin(), recs.end(), [](const Rec& a, const Rec& b) { return a.key < b.key; });
+  std::vector<Facet> outer;
+  for (std::size_t i = 0; i < recs.size();) {
+    std::size_t j = i + 1;
+    while (j < recs.size() && recs[j].key == recs[i].key) ++j;
+    if (j - i == 1) outer.push_back(recs[i].facet);
+    i = j;
+  }
+  Vec3 lo = mesh.vertices[0], hi = mesh.vertices[0];
+  for (const auto& p : mesh.vertices)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+  struct Side {
+    const char* name;
+    int axis;
+    double value;
+  };
+  std::vector<Side> sides;
+  if (mesh.dim == 2)
+    sides = {{"left", 0, lo.x}, {"right", 0, hi.x}, {"bottom", 1, lo.y}, {"top", 1, hi.y}};
+  else
+    sides = {{"left", 0, lo.x},  {"right", 0, hi.x},  {"front", 1, lo.y},
+             {"back", 1, hi.y},  {"bottom", 2, lo.z}, {"top", 2, hi.z}};
+  const double tol = 1e-12 * (norm(hi - lo) + 1.0);
+  for (const auto& s : sides) {
+    FaceSet fs;
+    fs.name = s.name;
+    for (const auto& f : outer) {
+      bool on = true;
+      for (int i = 0; i < f.count(); ++i)
+        on = on && std::abs(mesh.vertices[f.v[i]][s.axis] - s.value) <= tol;
+      if (on) fs.facets.push_back(f);
+    }
+    mesh.face_sets.push_back(std::move(fs));
+  }
+}
+
+Mesh grid_2d(int nx, int ny, double h, bool quads) {
+  Mesh m;
+  m.dim = 2;
+  m.region_names = {"rock"};
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.vertices.push_back({h * i, h * j, 0.0});
+  auto vid = [&](int i, int j) { return static_cast<std::int32_t>(j * (nx + 1) + i); };
+  auto add = [&](ElemType t, std::array<std::int32_t, 4> v) {
+    m.elem_type.push_back(t);
+    m.elem_vertices.push_back(v);
+    m.elem_region.push_back(0);
+    m.elem_tag.push_back(static_cast<std::int64_t>(m.elem_tag.size() + 1));
+  };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if (quads) {
+        add(ElemType::Quad4, {vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)});
+      } else {
+        add(ElemType::Tri3, {vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), -1});
+        add(ElemType::Tri3, {vid(i, j), vid(i + 1, j + 1), vid(i, j + 1), -1});
+      }
+    }
+  add_box_face_sets(m);
+  return m;
+}
+
+// splitmix64: a deterministic hash for the pseudo-random benchmark state.
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+// Uniform in [-1, 1).
+double unit(std::uint64_t key) {
+  return 2.0 * static_cast<double>(mix(key) >> 11) * (1.0 / 9007199254740992.0) - 1.0;
+}
+Vec3 random_vec(std::uint64_t key, int dim) {
+  return {unit(4 * key), unit(4 * key + 1), dim == 3 ? unit(4 * key + 2) : 0.0};
+}
+
+template <class T>
+std::size_t bytes_of(const std::vector<T>& v) {
+  return v.capacity() * sizeof(T);
+}
+template <class T>
+double size_of(const std::vector<T>& v) {
+  return static_cast<double>(v.size() * sizeof(T));
+}
+
+}  // namespace
+
+Mesh structured_tet_box(int nx, int ny, int nz, double h) {
+  Mesh m;
+  m.dim = 3;
+  m.region_names = {"rock"};
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) m.vertices.push_back({h * i, h * j, h * k});
+  auto vid = [&](int i, int j, int k) {
+    return static_cast<std::int32_t>((k * (ny + 1) + j) * (nx + 1) + i);
+  };
+  const std::array<std::array<int, 3>, 6> perms{
+      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& p : perms) {
+          std::array<int, 3> c{i, j, k};
+          std::array<std::int32_t, 4> t{};
+          t[0] = vid(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            t[s + 1] = vid(c[0], c[1], c[2]);
+          }
+          const Vec3 a = m.vertices[t[0]], b = m.vertices[t[1]], cc = m.vertices[t[2]],
+                     d = m.vertices[t[3]];
+          if (dot(b - a, cross(cc - a, d - a)) < 0) std::swap(t[1], t[2]);
+          m.elem_type.push_back(ElemType::Tet4);
+          m.elem_vertices.push_back(t);
+          m.elem_region.push_back(0);
+          m.elem_tag.push_back(static_cast<std::int64_t>(m.elem_tag.size() + 1));
+        }
+  add_box_face_sets(m);
+  return m;
+}
+
+Mesh structured_tri_grid(int nx, int ny, double h) { return grid_2d(nx, ny, h, false); }
+Mesh structured_quad_grid(int nx, int ny, double h) { return grid_2d(nx, ny, h, true); }
+
+std::array<int, 3> tet_cells_for(std::int64_t blocks) {
+  const double cubes = std::max(1.0, static_cast<double>(blocks) / 6.0);
+  const int n = std::max(1, static_cast<int>(std::lround(std::cbrt(cubes))));
+  const int nz = std::max(1, static_cast<int>(std::lround(cubes / (double(n) * n))));
+  return {n, n, nz};
+}
+std::array<int, 2> tri_cells_for(std::int64_t blocks) {
+  const double sq = std::max(1.0, static_cast<double>(blocks) / 2.0);
+  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(sq))));
+  return {n, std::max(1, static_cast<int>(std::lround(sq / n)))};
+}
+std::array<int, 2> quad_cells_for(std::int64_t blocks) {
+  const double sq = std::max(1.0, static_cast<double>(blocks));
+  const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(sq))));
+  return {n, std::max(1, static_cast<int>(std::lround(sq / n)))};
+}
+
+BlockMaterial rock_material() {
+  BlockMaterial m;
+  m.name = "granite";
+  m.density = 2681;
+  m.youngs = 99.3e9;
+  m.poisson = 0.28;
+  m.regions = {"rock"};
+  return m;
+}
+
+InterfaceMaterial interface_material(InterfaceLaw law) {
+  InterfaceMaterial im;
+  im.name = std::string("bond_") + name_of(law);
+  im.law = law;
+  im.tensile_strength = 8.11e6;
+  im.cohesion = 20e6;
+  im.friction_deg = 35;
+  im.dilation_deg = 15;
+  im.gt = 70;
+  im.gs = 700;
+  im.stiffness_factor = 10;
+  im.is_default = true;
+  return im;
+}
+
+Case box_case(int dim, Vec3 extent, double h, InterfaceLaw law, int bars) {
+  Case c;
+  c.path = "bench model";
+  c.title = "bench";
+  c.materials = {rock_material()};
+  c.interfaces = {interface_material(law)};
+  c.explosives = {{"emulsion", *builtin_explosive("emulsion")}};
+  const int up_axis = dim == 3 ? 2 : 1;
+  Vec3 up{};
+  up[up_axis] = 1.0;
+  const double height = extent[up_axis];
+  // Off the cell lines by a fraction of a cell, so that no bar runs exactly along a face.
+  const Vec3 centre = 0.5 * extent + Vec3{0.23 * h, dim == 3 ? 0.31 * h : 0.0, 0.0};
+  for (int k = 0; k < bars; ++k) {
+    Vec3 p = centre;
+    if (bars > 1) {
+      const double a = 2.0 * 3.14159265358979323846 * k / bars;
+      if (dim == 3) {
+        p.x += 0.25 * extent.x * std::cos(a);
+        p.y += 0.25 * extent.y * std::sin(a);
+      } else {
+        p.x += 0.25 * extent.x * (2.0 * k / (bars - 1) - 1.0);
+      }
+    }
+    HoleDef hole;
+    hole.name = fmt::format("hole{}", k + 1);
+    hole.collar = p;
+    hole.collar[up_axis] = height;
+    hole.end = p;
+    hole.end[up_axis] = 0.25 * height;
+    hole.diameter = 0.04;
+    hole.model = ChargeModel::Bar;
+    Deck d;
+    d.explosive = "emulsion";
+    d.length = 0.5 * height;
+    d.bottom = hole.end;
+    d.top = hole.end + d.length * up;
+    hole.decks = {d};
+    hole.stemming = {{d.length, 0.75 * height}};
+    c.holes.push_back(hole);
+  }
+  BoundaryCondition fixed;
+  fixed.faces = "bottom";
+  fixed.type = BoundaryType::Fixed;
+  c.boundaries.push_back(fixed);
+  for (const char* side : {"left", "right", "front", "back"}) {
+    if (dim == 2 && (std::string(side) == "front" || std::string(side) == "back")) continue;
+    BoundaryCondition nr;
+    nr.faces = side;
+    nr.type = BoundaryType::NonReflecting;
+    c.boundaries.push_back(nr);
+  }
+  return c;
+}
+
+void apply_bench_state(Model& m, double h, double strain, double rotation, double jitter,
+                       double speed, double speed_jitter, std::uint64_t seed) {
+  Vec3 lo = m.X[0], hi = m.X[0];
+  for (const auto& p : m.X)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+  const Vec3 c = 0.5 * (lo + hi);
+  const double cr = std::cos(rotation), sr = std::sin(rotation);
+  const std::uint64_t vbase = mix(seed) & 0xffffffffULL, nbase = mix(seed + 1) << 32;
+  for (std::size_t n = 0; n < m.n_nodes(); ++n) {
+    const auto vtx = static_cast<std::uint64_t>(m.node_vertex[n]);
+    const Vec3 r = m.X[n] - c;
+    const Vec3 rot{cr * r.x - sr * r.y, sr * r.x + cr * r.y, r.z};
+    m.x[n] = c + rot + (strain * h) * random_vec(vbase + 2 * vtx, m.dim) +
+             jitter * random_vec(nbase + 2 * n, m.dim);
+    m.v[n] = speed * random_vec(vbase + 2 * vtx + 1, m.dim) +
+             speed_jitter * random_vec(nbase + 2 * n + 1, m.dim);
+  }
+}
+
+double mean_polar_iterations(const Model& m) {
+  double sum = 0;
+  std::int64_t count = 0;
+  for (const auto& g : m.groups) {
+    if (g.type != ElemType::Tet4 || g.kind != BlockKind::Elastic) continue;
+    for (auto b = g.begin; b < g.end; ++b) {
+      const auto n0 = m.block_first_node[b];
+      const double* gm = m.geom.data() + m.geom_offset[b];
+      Mat3 ds, dminv;
+      for (int j = 0; j < 3; ++j) {
+        const Vec3 d = m.x[n0 + 1 + j] - m.x[n0];
+        ds(0, j) = d.x;
+        ds(1, j) = d.y;
+        ds(2, j) = d.z;
+      }
+      for (int q = 0; q < 9; ++q) dminv.m[q] = gm[q];
+      Mat3 R;
+      const int it = polar_3d(ds * dminv, R);
+      if (it < 0) continue;
+      sum += it;
+      ++count;
+    }
+  }
+  return count ? sum / static_cast<double>(count) : 0.0;
+}
+
+std::size_t model_bytes(const Model& m) {
+  // Every std::vector member of Model (keep in step with model/model.hpp).
+  std::size_t b = 0;
+  b += bytes_of(m.X) + bytes_of(m.x) + bytes_of(m.v) + bytes_of(m.f) + bytes_of(m.mass) +
+       bytes_of(m.inv_mass) + bytes_of(m.damping) + bytes_of(m.local_damping) +
+       bytes_of(m.node_block) + bytes_of(m.node_vertex);
+  b += bytes_of(m.groups) + bytes_of(m.block_type) + bytes_of(m.block_first_node) +
+       bytes_of(m.block_region) + bytes_of(m.block_material) + bytes_of(m.block_elem_tag) +
+       bytes_of(m.block_volume0) + bytes_of(m.block_size) + bytes_of(m.block_altitude0) +
+       bytes_of(m.geom) + bytes_of(m.geom_offset) + bytes_of(m.stress) + bytes_of(m.stress0) +
+       bytes_of(m.strain_energy) + bytes_of(m.vol_ratio);
+  b += bytes_of(m.iface_block_a) + bytes_of(m.iface_block_b) + bytes_of(m.iface_material) +
+       bytes_of(m.iface_area0) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area) +
+       bytes_of(m.sp_kn) + bytes_of(m.sp_ks) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
+       bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_state) +
+       bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) + bytes_of(m.sp_dissipated) +
+       bytes_of(m.sp_force) + bytes_of(m.node_sp_offset) + bytes_of(m.node_sp_list);
+  b += bytes_of(m.block_materials) + bytes_of(m.iface_materials) + bytes_of(m.spring_laws) +
+       bytes_of(m.region_names) + bytes_of(m.facet_sets);
+  for (const auto& s : m.facet_sets) b += bytes_of(s.facets);
+  return b;
+}
+
+StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
+  StepBytes s;
+  // update_positions: read x, v; write x.
+  s.positions = 2 * size_of(m.x) + size_of(m.v);
+  // block_forces: read the block arrays, x and the reference gradients; write f, stress, strain
+  // energy, volume ratio.
+  s.blocks = size_of(m.block_first_node) + size_of(m.geom_offset) + size_of(m.geom) +
+             size_of(m.block_material) + size_of(m.x) + size_of(m.stress0) +
+             size_of(m.block_volume0) + size_of(m.f) + size_of(m.stress) +
+             size_of(m.strain_energy) + size_of(m.vol_ratio);
+  // spring_forces: read the interface arrays, block sizes, node indices, x, v and the spring
+  // constants; read and write the spring state and the spring force.
+  s.springs = size_of(m.iface_material) + size_of(m.iface_block_a) + size_of(m.iface_block_b) +
+              size_of(m.block_size) + size_of(m.sp_a) + size_of(m.sp_b) + size_of(m.x) +
+              size_of(m.v) + size_of(m.sp_kn) + size_of(m.sp_ks) + size_of(m.sp_area) +
+              2 * (size_of(m.sp_fn) + size_of(m.sp_fs) + size_of(m.sp_w) + size_of(m.sp_slip) +
+                   size_of(m.sp_dil) + size_of(m.sp_state) + size_of(m.sp_mode) +
+                   size_of(m.sp_break_time) + size_of(m.sp_dissipated) + size_of(m.sp_force));
+  // gather_spring_forces: read the CSR list and the spring forces; read and write f.
+  s.gather = size_of(m.node_sp_offset) + size_of(m.node_sp_list) + size_of(m.sp_force) +
+             2 * size_of(m.f);
+  // bar loads: per loaded block, read x of its 4 nodes, read and write f, and the AppliedLoads
+  // record (node, force, old velocity) per node.
+  s.loads = static_cast<double>(loaded_blocks) * 4.0 *
+            (3 * sizeof(Vec3) + sizeof(std::int32_t) + 2 * sizeof(Vec3) + sizeof(Vec3));
+  // integrate: read mass, f, v, local damping, damping, dissipated; write v, dissipated.
+  s.integrate = size_of(m.mass) + size_of(m.f) + 2 * size_of(m.v) + size_of(m.local_damping) +
+                size_of(m.damping) + 2.0 * static_cast<double>(m.n_nodes() * sizeof(double));
+  return s;
+}
+
+double triad_bandwidth(std::size_t n, int threads, int reps) {
+  std::unique_ptr<double[]> a(new double[n]), b(new double[n]), c(new double[n]);
+  double* pa = a.get();
+  double* pb = b.get();
+  double* pc = c.get();
+  const auto nn = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (std::int64_t i = 0; i < nn; ++i) {
+    pa[i] = 0.0;
+    pb[i] = 1.0;
+    pc[i] = 2.0;
+  }
+  double best = 1e300;
+  const double s = 3.0;
+  for (int r = 0; r < reps; ++r) {
+    const double t0 = omp_get_wtime();
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::int64_t i = 0; i < nn; ++i) pa[i] = pb[i] + s * pc[i];
+    best = std::min(best, omp_get_wtime() - t0);
+  }
+  // Keep the result observable so the loop cannot be dropped.
+  volatile double sink = pa[n / 2];
+  (void)sink;
+  return 24.0 * static_cast<double>(n) / best / 1e9;
+}
+
+}  // namespace bench
+
+namespace {
+
+enum Kernel {
+  kPositions,
+  kBlocks,
+  kSprings,
+  kGather,
+  kLoads,
+  kBoundary,
+  kIntegrate,
+  kConstraints,
+  kNumKernels
+};
+constexpr const char* kKernelNames[kNumKernels] = {
+    "update_positions", "block_forces", "spring_forces", "gather_spring_forces",
+    "explosive_loads",  "boundary_forces", "integrate",   "constraints_and_work"};
+
+struct LoopResult {
+  int threads = 0;
+  double wall = 0;                     // s, whole loop
+  double cpu = 0;                      // s, CPU time of the process over the loop
+  std::array<double, kNumKernels> k{}; // s per kernel, summed over the steps
+  std::int64_t broken_end = 0;
+};
+
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// The 1-minute load average (/proc/loadavg), or -1.
+double load_average() {
+  double l = -1;
+  if (std::FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &l) != 1) l = -1;
+    std::fclose(f);
+  }
+  return l;
+}
+
+std::int64_t broken_springs(const Model& m) {
+  std::int64_t n = 0;
+  for (auto s : m.sp_state) n += s != kIntact;
+  return n;
+}
+
+// The kernels of Simulation::step (solver/simulation.cpp) in the same order, each timed.
+LoopResult timed_loop(const Model& snapshot, const BarCharges& bars0, const Boundaries& bc0,
+                      double t0, double dt, int steps, int threads) {
+  omp_set_num_threads(threads);
+  Model m = snapshot;
+  BarCharges bars = bars0;
+  Boundaries bc = bc0;
+  AppliedLoads applied;
+  std::vector<double> dissipated(m.n_nodes(), 0.0);
+  double t = t0, w_explosive = 0, w_boundary = 0, w_absorbed = 0;
+  std::int64_t inverted = 0;
+  LoopResult r;
+  r.threads = threads;
+  auto one_step = [&](bool timed) {
+    double c0 = omp_get_wtime(), c1;
+    auto lap = [&](Kernel k) {
+      c1 = omp_get_wtime();
+      if (timed) r.k[k] += c1 - c0;
+      c0 = c1;
+    };
+    update_positions(m, dt);
+    lap(kPositions);
+    std::int32_t first = -1;
+    inverted += block_forces(m, &first);
+    lap(kBlocks);
+    spring_forces(m, dt, t);
+    lap(kSprings);
+    gather_spring_forces(m);
+    lap(kGather);
+    applied.clear();
+    if (!bars.empty()) bar_loads(m, bars, applied, t);
+    lap(kLoads);
+    boundary_forces(m, bc, t);
+    lap(kBoundary);
+    integrate(m, Vec3{}, dt, dissipated, nullptr);
+    lap(kIntegrate);
+    w_boundary += apply_constraints(m, bc, t + 0.5 * dt, dt);
+    for (std::size_t i = 0; i < applied.node.size(); ++i)
+      w_explosive += dot(applied.force[i], 0.5 * (applied.v_old[i] + m.v[applied.node[i]])) * dt;
+    double absorbed = 0;
+    w_boundary += load_work(m, bc, dt, &absorbed);
+    w_absorbed += absorbed;
+    lap(kConstraints);
+    t += dt;
+  };
+  // Two untimed steps: first touch of the copies by this thread count, warm caches.
+  one_step(false);
+  one_step(false);
+  const double w0 = omp_get_wtime(), cpu0 = process_cpu_seconds();
+  for (int s = 0; s < steps; ++s) one_step(true);
+  r.wall = omp_get_wtime() - w0;
+  r.cpu = process_cpu_seconds() - cpu0;
+  r.broken_end = broken_springs(m);
+  return r;
+}
+
+// Best (smallest wall time) of `reps` runs.
+LoopResult best_loop(const Model& snapshot, const BarCharges& bars, const Boundaries& bc, double t0,
+                     double dt, int steps, int threads, int reps) {
+  LoopResult best;
+  for (int i = 0; i < reps; ++i) {
+    LoopResult r = timed_loop(snapshot, bars, bc, t0, dt, steps, threads);
+    if (i == 0 || r.wall < best.wall) best = r;
+  }
+  return best;
+}
+
+}  // namespace
+
+int run_bench(const BenchOptions& opt) {
+  const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
+  const int steps = std::max(1, opt.steps);
+  const double h = 0.05;
+  const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, opt.blocks));
+  const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
+  const Case c = bench::box_case(3, extent, h, InterfaceLaw::MohrCoulomb, 1);
+
+  const double load0 = load_average();
+  const double setup0 = omp_get_wtime();
+  omp_set_num_threads(threads);
+  const Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], h);
+  Simulation sim(build_model(mesh, c.materials, c.interfaces, c.path), c);
+  BarCharges bars = build_bar_charges(sim.model(), c);
+  sim.add_load([&bars](Model& mm, AppliedLoads& out, double t) { bar_loads(mm, bars, out, t); });
+  const double setup_s = omp_get_wtime() - setup0;
+
+  const Model& m0 = sim.model();
+  const auto nb = static_cast<double>(m0.n_blocks());
+  const auto nsp = static_cast<double>(m0.n_springs());
+  const std::size_t mem = bench::model_bytes(m0);
+
+  // Warm-up: step until cracking is under way (0.5 % of the spring points broken), at most
+  // 20 x steps + 2000 steps.
+  const std::int64_t want_broken = std::max<std::int64_t>(1, static_cast<std::int64_t>(0.005 * nsp));
+  const std::int64_t max_warm = 20LL * steps + 2000;
+  const double warm0 = omp_get_wtime();
+  std::int64_t warm_steps = 0, broken0 = 0;
+  while (warm_steps < max_warm) {
+    sim.step();
+    ++warm_steps;
+    if (warm_steps % 10 == 0 && (broken0 = broken_springs(sim.model())) >= want_broken) break;
+  }
+  broken0 = broken_springs(sim.model());
+  const double warm_s = omp_get_wtime() - warm0;
+
+  // Timed runs, each from the same post-warm-up state: 1 and 2 threads (and `threads`).
+  const Model snapshot = sim.model();
+  const Boundaries bc = prepare_boundaries(snapshot, c);
+  const double t0 = sim.time(), dt = sim.dt();
+  const double polar_it = bench::mean_polar_iterations(snapshot);
+  constexpr int kReps = 3;
+  const LoopResult r1 = best_loop(snapshot, bars, bc, t0, dt, steps, 1, kReps);
+  const LoopResult r2 = best_loop(snapshot, bars, bc, t0, dt, steps, 2, kReps);
+  LoopResult rm = threads == 1 ? r1 : r2;
+  if (threads != 1 && threads != 2) rm = best_loop(snapshot, bars, bc, t0, dt, steps, threads, kReps);
+
+  // The real Simulation::step on the same state and thread count, for comparison.
+  omp_set_num_threads(threads);
+  const double s0 = omp_get_wtime();
+  for (int s = 0; s < steps; ++s) sim.step();
+  const double sim_wall = omp_get_wtime() - s0;
+
+  // Memory bandwidth: triad over 3 x 80 MB, 2 threads, best of 5.
+  const std::size_t triad_n = 10'000'000;
+  const double triad = bench::triad_bandwidth(triad_n, 2, 5);
+  omp_set_num_threads(threads);
+
+  const auto bytes = bench::estimate_step_bytes(snapshot, bars.elem_block.size());
+  const double step_s = rm.wall / steps;
+  const double ns_block = rm.wall / (nb * steps) * 1e9;
+  const double block_rate = nb * steps / rm.wall;
+  const double spring_rate = nsp * steps / rm.wall;
+  const double speedup = r1.wall / r2.wall;
+  const double step_gbs = bytes.total() / step_s / 1e9;
+  const double solver_extra = static_cast<double>(snapshot.n_nodes() * 2 * sizeof(double));
+  const double sim_ns_block = sim_wall / (nb * steps) * 1e9;
+  const double load1 = load_average();
+  // CPU time / (wall time x threads): below 1 when the process did not have its cores (a busy
+  // machine); the 1-thread CPU time per block-step is then the more trustworthy cost figure.
+  const double share1 = r1.cpu / r1.wall, share2 = r2.cpu / (2.0 * r2.wall);
+  const double cpu_ns_block_1 = r1.cpu / (nb * steps) * 1e9;
+  double ksum = 0;
+  for (double k : rm.k) ksum += k;
+
+  if (opt.json) {
+    std::string kernels;
+    for (int k = 0; k < kNumKernels; ++k)
+      kernels += fmt::format("{}\"{}\": {{\"ns_per_block_step\": {:.4g}, \"share\": {:.4f}}}",
+                             k ? ", " : "", kKernelNames[k], rm.k[k] / (nb * steps) * 1e9,
+                             rm.k[k] / ksum);
+    std::printf(
+        "%s\n",
+        fmt::format(
+            "{{\"blocks\": {}, \"nodes\": {}, \"interfaces\": {}, \"spring_points\": {}, "
+            "\"steps\": {}, \"threads\": {}, \"dt\": {:.6g}, \"warmup_steps\": {}, "
+            "\"broken_at_start\": {}, \"broken_at_end\": {}, \"ns_per_block_step\": {:.4g}, "
+            "\"block_steps_per_s\": {:.4g}, \"spring_steps_per_s\": {:.4g}, "
+            "\"ns_per_block_step_1_thread\": {:.4g}, \"ns_per_block_step_2_threads\": {:.4g}, "
+            "\"speedup_2_threads\": {:.4g}, \"simulation_step_ns_per_block\": {:.4g}, "
+            "\"bytes_per_block\": {:.1f}, \"bytes_per_block_with_solver\": {:.1f}, "
+            "\"triad_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
+            "\"step_gb_s_estimate\": {:.4g}, \"bandwidth_fraction\": {:.4g}, "
+            "\"polar_iterations\": {:.3g}, \"cpu_ns_per_block_step_1_thread\": {:.4g}, "
+            "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
+            "\"load_average\": [{:.2f}, {:.2f}], \"kernels\": {{{}}}}}",
+            m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
+            warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
+            r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup, sim_ns_block,
+            static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
+            bytes.total(), step_gbs, step_gbs / triad, polar_it, cpu_ns_block_1, share1, share2,
+            load0, load1, kernels)
+            .c_str());
+    return 0;
+  }
+
+  std::string out;
+  out += fmt::format(
+      "cdemblast bench: {} tetrahedra ({} x {} x {} cubes of {} m, 6 tets each), {} nodes, {} "
+      "interfaces, {} spring points\n",
+      m0.n_blocks(), cells[0], cells[1], cells[2], h, m0.n_nodes(), m0.n_ifaces(), m0.n_springs());
+  out += fmt::format(
+      "  granite E 99.3 GPa, brittle Mohr-Coulomb interfaces (f_t 8.11 MPa, c 20 MPa, phi 35 deg); "
+      "one emulsion bar (40 mm, {} segments, {} loaded blocks); bottom fixed, sides "
+      "non-reflecting\n",
+      bars.n_segments(), bars.elem_block.size());
+  out += fmt::format("  set-up {:.2f} s; dt = {:.4g} s ({})\n", setup_s, dt, sim.stable().limit);
+  out += fmt::format(
+      "  warm-up: {} steps in {:.2f} s to t = {:.4g} s: {} spring points broken ({:.2f} %)\n",
+      warm_steps, warm_s, t0, broken0, 100.0 * static_cast<double>(broken0) / nsp);
+  out += fmt::format("  mean Newton iterations of the tet polar decomposition at that state: {:.2f}\n",
+                     polar_it);
+  out += fmt::format("  timed: {} steps per run, best of {} runs from the same state; {} broken "
+                     "at the end ({:.2f} %)\n\n",
+                     steps, kReps, rm.broken_end, 100.0 * static_cast<double>(rm.broken_end) / nsp);
+  out += fmt::format("throughput ({} thread{}):\n", threads, threads == 1 ? "" : "s");
+  out += fmt::format("  block-steps/s          {:.4g}\n", block_rate);
+  out += fmt::format("  spring-point-steps/s   {:.4g}\n", spring_rate);
+  out += fmt::format("  ns per block-step      {:.1f}   (target 40 on 2 threads)\n", ns_block);
+  out += fmt::format("  Simulation::step       {:.1f} ns per block-step (same state, one run)\n\n",
+                     sim_ns_block);
+  out += "kernel split:\n";
+  out += fmt::format("  {:<22} {:>9} {:>10} {:>7}\n", "kernel", "ms/step", "ns/block", "share");
+  for (int k = 0; k < kNumKernels; ++k)
+    out += fmt::format("  {:<22} {:>9.3f} {:>10.2f} {:>6.1f}%\n", kKernelNames[k],
+                       rm.k[k] / steps * 1e3, rm.k[k] / (nb * steps) * 1e9,
+                       100.0 * rm.k[k] / ksum);
+  out += fmt::format("  {:<22} {:>9.3f} {:>10.2f}\n\n", "sum", ksum / steps * 1e3,
+                     ksum / (nb * steps) * 1e9);
+  out += fmt::format(
+      "threads: 1 thread {:.1f} ns/block-step, 2 threads {:.1f}: speed-up {:.2f} (target >= "
+      "1.8)\n",
+      r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup);
+  out += fmt::format(
+      "  CPU time / (wall x threads): {:.2f} on 1 thread, {:.2f} on 2; 1-thread CPU time {:.1f} "
+      "ns/block-step\n",
+      share1, share2, cpu_ns_block_1);
+  out += fmt::format("  load average {:.2f} at the start, {:.2f} at the end ({} cores)\n", load0,
+                     load1, omp_get_num_procs());
+  if (share1 < 0.9 || share2 < 0.9 || load1 > omp_get_num_procs())
+    out += "  WARNING: the machine is busy (other processes share the cores): wall times, the\n"
+           "  speed-up and the bandwidth fraction are pessimistic; compare CPU times.\n";
+  out += fmt::format(
+      "memory: Model {:.0f} bytes per block (target <= 1024), {:.0f} with the solver's per-node "
+      "arrays\n",
+      static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb);
+  out += fmt::format(
+      "bandwidth: triad a = b + s c, 3 x {:.0f} MB, 2 threads, best of 5: {:.2f} GB/s\n",
+      triad_n * 8.0 / 1e6, triad);
+  out += fmt::format(
+      "  step touches ~{:.1f} MB ({:.0f} B per block; estimate: each array a kernel reads or "
+      "writes counted once per kernel)\n",
+      bytes.total() / 1e6, bytes.total() / nb);
+  out += fmt::format("  -> {:.2f} GB/s at {} thread{} = {:.0f} % of the triad\n", step_gbs, threads,
+                     threads == 1 ? "" : "s", 100.0 * step_gbs / triad);
+  std::fputs(out.c_str(), stdout);
+  return 0;
+}
+
+}  // namespace cdem

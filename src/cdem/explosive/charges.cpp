@@ -125,7 +125,10 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         if (!overlap) continue;
         double s0, s1;
         const auto bi = static_cast<std::int32_t>(b);
-        if (clip(m, bi, bar.start, d, tol, s0, s1) && (s1 - s0) * bar.length > 1e-9 * m.block_size[b]) {
+        // Keep a block only when the bar runs inside it over a real length (1e-4 L_c), so a
+        // block that touches the bar at a corner or at the bar's end point is not bound, while
+        // a bar along a face or edge (widened by tol) binds the blocks on both sides.
+        if (clip(m, bi, bar.start, d, tol, s0, s1) && (s1 - s0) * bar.length > 1e-4 * m.block_size[b]) {
           if (!m.block_materials[m.block_material[b]].explosive.empty())
             throw InputError(fmt::format("{}: the bar runs through explosive blocks (region '{}'); "
                                          "a bar charge needs rock around it: give the region a rock "
@@ -165,7 +168,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         bc.seg_v0.push_back(m.dim == 3 ? kPi * bar.r0 * bar.r0 * bar.h : 2.0 * bar.r0 * bar.h);
         for (const auto& x : iv) {
           const double ov = std::min(a1, x.s1) - std::max(a0, x.s0);
-          if (ov * bar.length <= 1e-9 * m.block_size[x.block]) continue;
+          if (ov * bar.length <= 1e-4 * m.block_size[x.block]) continue;
           bc.seg_elem.push_back(x.block);
           if (elem_slot[x.block] < 0) {
             elem_slot[x.block] = static_cast<std::int32_t>(bc.elem_block.size());

@@ -55,7 +55,8 @@ constexpr double kRound = 1e-12;
 // h = L / ceil(L / min L_c over the crossed elements): never longer than an element crossed, and
 // as long as possible. The grid has two thin rows (cells 0.1 x 0.04, L_c = sqrt(0.004)).
 TEST(BarSegmentation, LengthFromSmallestCrossedElement) {
-  const Mesh mesh = graded_quad_grid({0, 0.1, 0.2, 0.3, 0.4}, {0, 0.1, 0.2, 0.24, 0.28, 0.38, 0.48});
+  const Mesh mesh =
+      graded_quad_grid({0, 0.1, 0.2, 0.3, 0.4}, {0, 0.1, 0.2, 0.24, 0.28, 0.38, 0.48});
   const Model m = rock_model(mesh);
   const Vec3 a0{0.15, 0.05, 0}, a1{0.15, 0.45, 0};  // crosses the thin rows
   const Vec3 b0{0.35, 0.02, 0}, b1{0.35, 0.17, 0};  // rows 0 and 1 only (L_c = 0.1)
@@ -86,7 +87,8 @@ TEST(BarSegmentation, LengthFromSmallestCrossedElement) {
 // 7 (the ceiling must not round 5.999...9 or 6.000...1 up).
 TEST(BarSegmentation, ExactMultipleOfElementSize) {
   const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
-  const BarCharges bc = build_bar_charges(m, bar_case({bar("full", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.02)}));
+  const BarCharges bc =
+      build_bar_charges(m, bar_case({bar("full", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.02)}));
   ASSERT_EQ(bc.bars.size(), 1u);
   EXPECT_EQ(bc.n_segments(), 6u);
   EXPECT_NEAR(bc.bars[0].h, 0.1, kRound);
@@ -128,7 +130,8 @@ TEST(BarIgnition, TimesFromInitiationPointBottomAndTop) {
     for (auto j = b.seg_begin; j < b.seg_end; ++j) {
       const double dj = (j - b.seg_begin + 0.5) * b.h;
       // t ~ 1e-3 s: 1e-15 s absolute is a few ulps.
-      EXPECT_NEAR(bc.seg_t_ign[j], ex[k].t0 + dj / kD, 1e-15) << b.hole << " deck " << b.deck << " seg " << j;
+      EXPECT_NEAR(bc.seg_t_ign[j], ex[k].t0 + dj / kD, 1e-15)
+          << b.hole << " deck " << b.deck << " seg " << j;
       const Vec3 centre = ex[k].start + dj * dir;
       bool contains = false;
       for (auto e : segment_blocks(bc, static_cast<std::size_t>(j)))
@@ -136,7 +139,8 @@ TEST(BarIgnition, TimesFromInitiationPointBottomAndTop) {
       EXPECT_TRUE(contains) << b.hole << " seg " << j << ": no bound element contains its centre";
     }
     // Each deck binds exactly what its own segment of the hole crosses (not the stemming).
-    EXPECT_EQ(bar_blocks(bc, k), sampled_crossed_blocks(m, ex[k].start, ex[k].other, 4000)) << b.hole;
+    EXPECT_EQ(bar_blocks(bc, k), sampled_crossed_blocks(m, ex[k].start, ex[k].other, 4000))
+        << b.hole;
   }
 }
 
@@ -144,7 +148,8 @@ TEST(BarIgnition, TimesFromInitiationPointBottomAndTop) {
 // No force at all before the first ignition.
 TEST(BarIgnition, XiRampsLinearlyOverCrossingTime) {
   Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
-  BarCharges bc = build_bar_charges(m, bar_case({bar("ramp", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02, 1e-4)}));
+  BarCharges bc =
+      build_bar_charges(m, bar_case({bar("ramp", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02, 1e-4)}));
   ASSERT_EQ(bc.n_segments(), 5u);
   const double h = bc.bars[0].h, p1 = eos_pressure(bc.eos[0], 1.0);
   EXPECT_NEAR(p1, kP0, kRound * kP0);
@@ -163,7 +168,9 @@ TEST(BarIgnition, XiRampsLinearlyOverCrossingTime) {
       // (t - t_1) D / h loses ~ulp(t) D / h = 2e-20 * 5000 / 0.1 ~ 1e-15 to round-off.
       EXPECT_NEAR(bc.seg_xi[j], xi, 1e-12) << "segment " << j << " at t_1 + " << frac << " h/D";
       EXPECT_NEAR(bc.seg_p[j], xi * kP0, 1e-12 * kP0);
-      if (frac <= 0) EXPECT_EQ(bc.seg_p[j], 0.0);
+      if (frac <= 0) {
+        EXPECT_EQ(bc.seg_p[j], 0.0);
+      }
     }
 }
 
@@ -172,7 +179,8 @@ TEST(BarIgnition, XiRampsLinearlyOverCrossingTime) {
 // ---------------------------------------------------------------------------------------------
 
 // Sum of the forces bar_loads added to the nodes of each block, and the largest nodal force.
-std::map<std::int32_t, std::pair<Vec3, double>> forces_by_block(const Model& m, const AppliedLoads& out) {
+std::map<std::int32_t, std::pair<Vec3, double>> forces_by_block(const Model& m,
+                                                                const AppliedLoads& out) {
   std::map<std::int32_t, std::pair<Vec3, double>> r;
   for (std::size_t i = 0; i < out.node.size(); ++i) {
     auto& e = r[m.node_block[out.node[i]]];
@@ -225,7 +233,8 @@ TEST(BarLoads, NetForceOnLoadedElementsIsZeroTets) {
 // bar_loads the pressure is sigma_b = P0 (r0 / L_c)^a (L_c = s, v = 1, xi = 1).
 TEST(BarLoads, LoneSquareQuadInflatesSymmetrically) {
   const double s = 0.2;
-  Model m = rock_model(single_element(ElemType::Quad4, {{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}}));
+  Model m =
+      rock_model(single_element(ElemType::Quad4, {{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}}));
   const Vec3 cen{0.5 * s, 0.5 * s, 0};
   auto check = [&](const AppliedLoads& out, double p) {
     ASSERT_EQ(out.node.size(), 4u);
@@ -280,10 +289,13 @@ TEST(BarLoads, LoneRegularTetInflatesSymmetrically) {
     check(out, 1e6);
   }
   const Vec3 opp = (v[1] + v[2] + v[3]) / 3.0;
-  const double d = 0.02, lc = std::cbrt(6.0 * std::abs(dot(v[1] - v[0], cross(v[2] - v[0], v[3] - v[0]))) / 6.0);
+  const double d = 0.02,
+               lc = std::cbrt(6.0 * std::abs(dot(v[1] - v[0], cross(v[2] - v[0], v[3] - v[0]))) /
+                              6.0);
   BarCharges bc = build_bar_charges(m, bar_case({bar("lone", opp, v[0], d)}));
   ASSERT_EQ(bc.elem_block.size(), 1u);
-  EXPECT_NEAR(bc.seg_v0[0], 3.14159265358979323846 * 0.01 * 0.01 * bc.bars[0].h, kRound * bc.seg_v0[0]);
+  EXPECT_NEAR(bc.seg_v0[0], 3.14159265358979323846 * 0.01 * 0.01 * bc.bars[0].h,
+              kRound * bc.seg_v0[0]);
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);
   const double att = std::min(1.0, std::pow(0.5 * d / lc, 1.25));
@@ -296,11 +308,14 @@ TEST(BarLoads, LoneRegularTetInflatesSymmetrically) {
 // ---------------------------------------------------------------------------------------------
 
 // A bar through the middle of a column of cells binds exactly that column (quads: one element
-// per row; triangles: both triangles of every cell), over the rows it spans.
+// per row; triangles: both triangles of every cell), over the rows it spans. Its ends (y = 0.02
+// and 0.58) are off the cells' diagonals (crossed at y = 0.05 + 0.1 j), so that the end triangles
+// are crossed over a positive length.
 TEST(BarBinding, ThroughMiddleOfColumn2D) {
   for (bool tris : {false, true}) {
     const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("mid", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)}));
+    const BarCharges bc =
+        build_bar_charges(m, bar_case({bar("mid", {0.25, 0.02, 0}, {0.25, 0.58, 0}, 0.02)}));
     const auto expected = blocks_where(m, [](Vec3 c) { return column_of(c, 0.1) == 2; });
     EXPECT_EQ(expected.size(), tris ? 12u : 6u);
     EXPECT_EQ(loaded_blocks(bc), expected) << (tris ? "triangles" : "quads");
@@ -308,20 +323,32 @@ TEST(BarBinding, ThroughMiddleOfColumn2D) {
   }
 }
 
-// A bar exactly along the edge x = 0.3 shared by columns 2 and 3 binds both columns.
+// A bar exactly along the edge x = 0.3 shared by columns 2 and 3 binds both columns (quads).
+// Triangles: every triangle with an edge on that line (half of the two columns: the others only
+// touch the line at a corner) is bound; that nothing more is bound is checked by
+// NoBindingThroughPointContacts.
 TEST(BarBinding, AlongSharedEdge2D) {
   for (bool tris : {false, true}) {
     const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("edge", {0.3, 0.05, 0}, {0.3, 0.55, 0}, 0.02)}));
-    const auto expected = blocks_where(m, [](Vec3 c) {
-      const int i = column_of(c, 0.1);
-      return i == 2 || i == 3;
-    });
-    EXPECT_EQ(loaded_blocks(bc), expected) << (tris ? "triangles" : "quads");
+    const Vec3 a{0.3, 0.05, 0}, b{0.3, 0.55, 0};
+    const BarCharges bc = build_bar_charges(m, bar_case({bar("edge", a, b, 0.02)}));
+    const auto ref = sampled_crossed_blocks(m, a, b, 4000);
+    if (!tris) {
+      const auto expected = blocks_where(m, [](Vec3 c) {
+        const int i = column_of(c, 0.1);
+        return i == 2 || i == 3;
+      });
+      EXPECT_EQ(ref, expected);
+      EXPECT_EQ(loaded_blocks(bc), expected) << "quads";
+    } else {
+      EXPECT_EQ(ref.size(), 12u);
+      const auto bound = loaded_blocks(bc);
+      EXPECT_TRUE(std::includes(bound.begin(), bound.end(), ref.begin(), ref.end())) << "triangles";
+    }
     // Every segment binds elements on both sides of the edge.
     for (std::size_t j = 0; j < bc.n_segments(); ++j) {
       int left = 0, right = 0;
-      for (auto b : segment_blocks(bc, j)) (centroid0(m, b).x < 0.3 ? left : right)++;
+      for (auto e : segment_blocks(bc, j)) (centroid0(m, e).x < 0.3 ? left : right)++;
       EXPECT_GT(left, 0) << "segment " << j;
       EXPECT_GT(right, 0) << "segment " << j;
     }
@@ -339,64 +366,113 @@ TEST(BarBinding, InclinedBar2D) {
   const auto& br = bc.bars[0];
   for (auto j = br.seg_begin; j < br.seg_end; ++j) {
     const Vec3 s0 = a + ((j - br.seg_begin) * br.h) * br.dir, s1 = s0 + br.h * br.dir;
-    EXPECT_EQ(segment_blocks(bc, static_cast<std::size_t>(j)), sampled_crossed_blocks(m, s0, s1, 4000))
+    EXPECT_EQ(segment_blocks(bc, static_cast<std::size_t>(j)),
+              sampled_crossed_blocks(m, s0, s1, 4000))
         << "segment " << j;
   }
 }
 
-// Tetrahedra (a box of cubes, 6 Kuhn tets each): a bar in general position, a bar lying in a
-// cube face (the plane x = 0.2, shared by the tets of two cells), and a bar along a vertical cube
-// edge (shared by the tets of four cells). The bound set equals the point-sampling reference;
-// the face bar binds elements on both sides of its plane. V0 = pi r0^2 h.
+// Tetrahedra (a box of 10 cm cubes, 6 Kuhn tets each). A bar in general position (vertical) and
+// an oblique one: the bound set equals the point-sampling reference. A bar lying in a cube face
+// (the plane x = 0.2, shared by the tets of two cells) binds every tet with a face on it, on both
+// sides; a bar along a vertical cube edge binds every tet around the edge, in the four cells
+// around it (that it binds nothing more: NoBindingThroughPointContacts). V0 = pi r0^2 h.
 TEST(BarBinding, Tetrahedra3D) {
   const Model m = rock_model(tet_box(4, 4, 4, 0.4, 0.4, 0.4));
   struct Line {
     std::string name;
     Vec3 a, b;
+    bool exact;  // general position: no point contacts
   };
-  const std::vector<Line> lines{{"general", {0.13, 0.16, 0.05}, {0.13, 0.16, 0.35}},
-                                {"face", {0.2, 0.13, 0.05}, {0.2, 0.13, 0.35}},
-                                {"edge", {0.2, 0.2, 0.05}, {0.2, 0.2, 0.35}},
-                                {"oblique", {0.03, 0.07, 0.02}, {0.36, 0.31, 0.38}}};
+  const std::vector<Line> lines{{"general", {0.13, 0.16, 0.05}, {0.13, 0.16, 0.35}, true},
+                                {"oblique", {0.03, 0.07, 0.02}, {0.36, 0.31, 0.38}, true},
+                                {"face", {0.2, 0.13, 0.05}, {0.2, 0.13, 0.35}, false},
+                                {"edge", {0.2, 0.2, 0.05}, {0.2, 0.2, 0.35}, false}};
   for (const auto& l : lines) {
     const BarCharges bc = build_bar_charges(m, bar_case({bar(l.name, l.a, l.b, 0.02)}));
     const auto ref = sampled_crossed_blocks(m, l.a, l.b, 6000);
-    EXPECT_EQ(loaded_blocks(bc), ref) << l.name;
+    const auto bound = loaded_blocks(bc);
+    if (l.exact)
+      EXPECT_EQ(bound, ref) << l.name;
+    else
+      EXPECT_TRUE(std::includes(bound.begin(), bound.end(), ref.begin(), ref.end())) << l.name;
     for (std::size_t j = 0; j < bc.n_segments(); ++j)
-      EXPECT_NEAR(bc.seg_v0[j], 3.14159265358979323846 * 1e-4 * bc.bars[0].h, kRound * bc.seg_v0[j]);
+      EXPECT_NEAR(bc.seg_v0[j], 3.14159265358979323846 * 1e-4 * bc.bars[0].h,
+                  kRound * bc.seg_v0[j]);
     if (l.name == "face") {
       int left = 0, right = 0;
-      for (auto b : loaded_blocks(bc)) (centroid0(m, b).x < 0.2 ? left : right)++;
+      for (auto e : ref) (centroid0(m, e).x < 0.2 ? left : right)++;
       EXPECT_GT(left, 0);
       EXPECT_GT(right, 0);
     }
     if (l.name == "edge") {
       std::set<std::pair<int, int>> cells;
-      for (auto b : loaded_blocks(bc)) cells.insert({column_of(centroid0(m, b), 0.1), row_of(centroid0(m, b), 0.1)});
+      for (auto e : ref)
+        cells.insert({column_of(centroid0(m, e), 0.1), row_of(centroid0(m, e), 0.1)});
       EXPECT_EQ(cells.size(), 4u) << "the cells around the edge";
     }
   }
 }
 
-// A bar whose end points and segment ends lie on element edges (here a bar over the rows
-// 0.1 .. 0.4 of a grid of 0.1 m cells, 3 segments of exactly one cell each) must bind, for each
-// segment, only the cells its own line crosses: segment j binds row j + 1 of column 2, nothing
-// of the rows below 0.1 or above 0.4 it merely touches at an end point.
-TEST(BarBinding, EndsOnElementEdgesBindOnlyCrossedElements) {
-  GTEST_SKIP() << "bug in src/cdem/explosive/charges.cpp lines 121/128 and 168: faces are widened "
-                  "by tol = 1e-6 L_c but a touching overlap is only rejected below 1e-9 L_c, so "
-                  "an element (or a segment) that only touches the bar at an end point is bound "
-                  "through a 1e-6 L_c sliver; see docs/verification_charges.md";
-  const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
-  const BarCharges bc = build_bar_charges(m, bar_case({bar("ends", {0.25, 0.1, 0}, {0.25, 0.4, 0}, 0.02)}));
-  EXPECT_EQ(loaded_blocks(bc), blocks_where(m, [](Vec3 c) {
-              return column_of(c, 0.1) == 2 && row_of(c, 0.1) >= 1 && row_of(c, 0.1) <= 3;
-            }));
-  ASSERT_EQ(bc.n_segments(), 3u);
-  for (std::size_t j = 0; j < 3; ++j) {
-    const auto segj = segment_blocks(bc, j);
-    ASSERT_EQ(segj.size(), 1u) << "segment " << j;
-    EXPECT_EQ(row_of(centroid0(m, *segj.begin()), 0.1), static_cast<int>(j) + 1);
+// Elements that touch a bar (or a segment) only at isolated points must not be bound: here the
+// bar and the segment ends lie on element edges, or the bar runs along an edge or a face and
+// passes through vertices and across face diagonals. Each case against the point-sampling
+// reference: (1) quads, a bar over rows 0.1 .. 0.4 (3 segments of exactly one cell): segment j
+// binds row j + 1 of column 2 only; (2) triangles, a bar along x = 0.3 (the triangles of columns
+// 2, 3 that only touch it at a corner); (3) tets, a bar in the face x = 0.2; (4) tets, a bar along
+// a vertical cube edge.
+TEST(BarBinding, NoBindingThroughPointContacts) {
+  {
+    const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
+    const BarCharges bc =
+        build_bar_charges(m, bar_case({bar("ends", {0.25, 0.1, 0}, {0.25, 0.4, 0}, 0.02)}));
+    EXPECT_EQ(loaded_blocks(bc), blocks_where(m, [](Vec3 c) {
+                return column_of(c, 0.1) == 2 && row_of(c, 0.1) >= 1 && row_of(c, 0.1) <= 3;
+              }));
+    ASSERT_EQ(bc.n_segments(), 3u);
+    for (std::size_t j = 0; j < 3; ++j) {
+      const auto segj = segment_blocks(bc, j);
+      ASSERT_EQ(segj.size(), 1u) << "segment " << j;
+      EXPECT_EQ(row_of(centroid0(m, *segj.begin()), 0.1), static_cast<int>(j) + 1);
+    }
+  }
+  {
+    const Model m = rock_model(tri_grid(6, 6, 0.6, 0.6));
+    const Vec3 a{0.3, 0.05, 0}, b{0.3, 0.55, 0};
+    const BarCharges bc = build_bar_charges(m, bar_case({bar("edge", a, b, 0.02)}));
+    EXPECT_EQ(loaded_blocks(bc), sampled_crossed_blocks(m, a, b, 4000))
+        << "triangles along an edge";
+  }
+  const Model m = rock_model(tet_box(4, 4, 4, 0.4, 0.4, 0.4));
+  for (const auto& [a, b] : {std::pair<Vec3, Vec3>{{0.2, 0.13, 0.05}, {0.2, 0.13, 0.35}},
+                             std::pair<Vec3, Vec3>{{0.2, 0.2, 0.05}, {0.2, 0.2, 0.35}}}) {
+    const BarCharges bc = build_bar_charges(m, bar_case({bar("tets", a, b, 0.02)}));
+    EXPECT_EQ(loaded_blocks(bc), sampled_crossed_blocks(m, a, b, 6000))
+        << "tets at x = " << a.x << ", y = " << a.y;
+  }
+}
+
+// A bar passing very close to mesh vertices (a diagonal of a 0.1 m grid, shifted by e = 0 ..
+// 1e-4 m, i.e. 0 .. 1e-3 L_c) lies inside the mesh over its whole length: no "void" error, and
+// the cells it runs through along their diagonal are bound (quads: the 6 diagonal cells, crossed
+// over 0.07 .. 0.14 m; the cells whose corners it clips may or may not be, by the length
+// clipped). Triangles (cell diagonals along the bar): the upper triangles of those cells.
+TEST(BarBinding, BarCloseToVerticesIsNotAVoid) {
+  for (bool tris : {false, true}) {
+    const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
+    for (double e : {0.0, 1e-7, 1e-6, 3e-6, 1e-5, 1e-4}) {
+      BarCharges bc;
+      ASSERT_NO_THROW(bc = build_bar_charges(m, bar_case({bar("near_vertex", {0.05, 0.05 + e, 0},
+                                                              {0.55, 0.55 + e, 0}, 0.02)})))
+          << (tris ? "triangles" : "quads") << ", e = " << e;
+      const auto bound = loaded_blocks(bc);
+      const auto diagonal = blocks_where(m, [&](Vec3 c) {
+        const int i = column_of(c, 0.1), j = row_of(c, 0.1);
+        return i == j && (!tris || c.y > c.x);  // triangles: the upper one of the cell
+      });
+      EXPECT_TRUE(std::includes(bound.begin(), bound.end(), diagonal.begin(), diagonal.end()))
+          << (tris ? "triangles" : "quads") << ", e = " << e;
+    }
   }
 }
 
@@ -441,7 +517,8 @@ TEST(BarVolume, FollowsBoundElementsVolumeRatio) {
   // (v = 1.17 and 1.67, below vc), and pressures that fall as the charge expands.
   const double vc = std::get<LandauEos>(eos).vc;
   EXPECT_GT(vc, 2.0);
-  for (int j = 0; j < 2; ++j) EXPECT_NEAR(bc.seg_p[j], kP0 * std::pow(bc.seg_v[j], -3.0), 1e-12 * kP0);
+  for (int j = 0; j < 2; ++j)
+    EXPECT_NEAR(bc.seg_p[j], kP0 * std::pow(bc.seg_v[j], -3.0), 1e-12 * kP0);
   EXPECT_GT(bc.seg_v[4], vc);  // second stage
   for (int j = 1; j < 5; ++j) EXPECT_LT(bc.seg_p[j], bc.seg_p[j - 1]);
   // Per element: the mean of its segments' P_r, times the attenuation.
@@ -470,9 +547,12 @@ TEST(BarAttenuation, FactorAndCap) {
                              {0.35, 0.06, 1.25, std::pow(0.3, 1.25)},
                              {0.45, 0.3, 1.25, 1.0}};  // (1.5)^1.25 = 1.66 without the cap
   std::vector<HoleDef> holes;
-  for (std::size_t k = 0; k < hs.size(); ++k)
-    holes.push_back(bar("h" + std::to_string(k), {hs[k].x, 0.05, 0}, {hs[k].x, 0.55, 0}, hs[k].d, 0.0,
-                        false, hs[k].a));
+  for (std::size_t k = 0; k < hs.size(); ++k) {
+    std::string name = "h";  // (not "h" + to_string: a GCC 12 -Wrestrict false positive)
+    name += std::to_string(k);
+    holes.push_back(
+        bar(name, {hs[k].x, 0.05, 0}, {hs[k].x, 0.55, 0}, hs[k].d, 0.0, false, hs[k].a));
+  }
   BarCharges bc = build_bar_charges(m, bar_case(holes));
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);
@@ -502,12 +582,14 @@ std::string input_error(F f) {
 
 TEST(BarErrors, BarPartlyOutsideMesh) {
   const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
-  const std::string msg = input_error(
-      [&] { build_bar_charges(m, bar_case({bar("poking_out", {0.25, 0.3, 0}, {0.25, 0.8, 0}, 0.02)})); });
+  const std::string msg = input_error([&] {
+    build_bar_charges(m, bar_case({bar("poking_out", {0.25, 0.3, 0}, {0.25, 0.8, 0}, 0.02)}));
+  });
   ASSERT_FALSE(msg.empty()) << "no InputError for a bar leaving the mesh";
   EXPECT_NE(msg.find("hole 'poking_out'"), std::string::npos) << msg;
   EXPECT_NE(msg.find("leaves the mesh"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("0.3 m from its initiation point"), std::string::npos) << msg;  // leaves at y = 0.6
+  EXPECT_NE(msg.find("0.3 m from its initiation point"), std::string::npos)
+      << msg;  // leaves at y = 0.6
 }
 
 TEST(BarErrors, BarCrossingVoid) {
@@ -515,14 +597,17 @@ TEST(BarErrors, BarCrossingVoid) {
   // A void 0.1 m high across columns 1..3: a hole region with no elements.
   remove_elements(mesh, [](Vec3 c) { return c.y > 0.3 && c.y < 0.4 && c.x > 0.1 && c.x < 0.4; });
   const Model m = rock_model(mesh);
-  const std::string msg = input_error(
-      [&] { build_bar_charges(m, bar_case({bar("across_void", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)})); });
+  const std::string msg = input_error([&] {
+    build_bar_charges(m, bar_case({bar("across_void", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)}));
+  });
   ASSERT_FALSE(msg.empty()) << "no InputError for a bar crossing a void";
   EXPECT_NE(msg.find("hole 'across_void'"), std::string::npos) << msg;
   EXPECT_NE(msg.find("crosses a void"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("0.25 m from its initiation point"), std::string::npos) << msg;  // void at y = 0.3
+  EXPECT_NE(msg.find("0.25 m from its initiation point"), std::string::npos)
+      << msg;  // void at y = 0.3
   // The same bar beside the void is fine.
-  EXPECT_NO_THROW(build_bar_charges(m, bar_case({bar("beside", {0.45, 0.05, 0}, {0.45, 0.55, 0}, 0.02)})));
+  EXPECT_NO_THROW(
+      build_bar_charges(m, bar_case({bar("beside", {0.45, 0.05, 0}, {0.45, 0.55, 0}, 0.02)})));
 }
 
 TEST(BarErrors, BarThroughExplosiveBlocksRefused) {
@@ -630,10 +715,14 @@ TEST(HoleCaseFile, Errors) {
   const std::vector<Bad> bad{
       {"too_long", head + replaced(hole, "length = 0.2", "length = 0.35"), "longer than the hole",
        "hole 'h1'"},
-      {"unknown_explosive", head + replaced(hole, "explosive = \"emulsion\"", "explosive = \"nitro_x\""),
+      {"unknown_explosive",
+       head + replaced(hole, "explosive = \"emulsion\"", "explosive = \"nitro_x\""),
        "unknown explosive 'nitro_x'", "emulsion"},
-      {"no_charge", head + hole.substr(0, hole.find("[[hole.charge]]")), "has no charge", "hole 'h1'"},
-      {"end_and_depth", head + replaced(hole, "end = [0.5, 0.5]", "end = [0.5, 0.5]\ndirection = [0.0, -1.0]\ndepth = 0.5"),
+      {"no_charge", head + hole.substr(0, hole.find("[[hole.charge]]")), "has no charge",
+       "hole 'h1'"},
+      {"end_and_depth",
+       head + replaced(hole, "end = [0.5, 0.5]",
+                       "end = [0.5, 0.5]\ndirection = [0.0, -1.0]\ndepth = 0.5"),
        "either 'end'", "'depth'"},
   };
   for (const auto& b : bad) {

@@ -3,11 +3,12 @@
 // material value types, a Case for in-code Simulation runs, and small tensor utilities
 // (rotations, imposed homogeneous maps x = c + A (X - c), Voigt conversions).
 #pragma once
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
-#include <omp.h>
 #include <string>
 #include <utility>
 #include <vector>
@@ -90,8 +91,8 @@ inline void add_box_face_sets(Mesh& mesh) {
   if (mesh.dim == 2)
     sides = {{"left", 0, lo.x}, {"right", 0, hi.x}, {"bottom", 1, lo.y}, {"top", 1, hi.y}};
   else
-    sides = {{"left", 0, lo.x},  {"right", 0, hi.x},  {"front", 1, lo.y},
-             {"back", 1, hi.y},  {"bottom", 2, lo.z}, {"top", 2, hi.z}};
+    sides = {{"left", 0, lo.x}, {"right", 0, hi.x},  {"front", 1, lo.y},
+             {"back", 1, hi.y}, {"bottom", 2, lo.z}, {"top", 2, hi.z}};
   const double tol = 1e-12 * (norm(hi - lo) + 1.0);
   for (const auto& s : sides) {
     FaceSet fs;
@@ -141,8 +142,9 @@ inline Mesh tri_grid(int nx, int ny, double lx, double ly, Vec3 origin = {},
   auto vid = [&](int i, int j) { return static_cast<std::int32_t>(j * (nx + 1) + i); };
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
-      for (const auto& t : {std::array<std::int32_t, 4>{vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), -1},
-                            std::array<std::int32_t, 4>{vid(i, j), vid(i + 1, j + 1), vid(i, j + 1), -1}}) {
+      for (const auto& t :
+           {std::array<std::int32_t, 4>{vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), -1},
+            std::array<std::int32_t, 4>{vid(i, j), vid(i + 1, j + 1), vid(i, j + 1), -1}}) {
         m.elem_type.push_back(ElemType::Tri3);
         m.elem_vertices.push_back(t);
         m.elem_region.push_back(0);
@@ -282,7 +284,11 @@ inline Mat3 from_sym6(const Sym6& s) {
   return Mat3{{s[0], s[3], s[5], s[3], s[1], s[4], s[5], s[4], s[2]}};
 }
 inline Sym6 to_sym6(const Mat3& a) {
-  return {a(0, 0), a(1, 1), a(2, 2), 0.5 * (a(0, 1) + a(1, 0)), 0.5 * (a(1, 2) + a(2, 1)),
+  return {a(0, 0),
+          a(1, 1),
+          a(2, 2),
+          0.5 * (a(0, 1) + a(1, 0)),
+          0.5 * (a(1, 2) + a(2, 1)),
           0.5 * (a(0, 2) + a(2, 0))};
 }
 
@@ -291,8 +297,12 @@ inline Sym6 to_sym6(const Mat3& a) {
 inline Sym6 hooke(const Sym6& eps, const BlockMaterial& mat) {
   const double lam = mat.lambda(), g = mat.shear();
   const double tr = eps[0] + eps[1] + eps[2];
-  return {lam * tr + 2 * g * eps[0], lam * tr + 2 * g * eps[1], lam * tr + 2 * g * eps[2],
-          2 * g * eps[3], 2 * g * eps[4], 2 * g * eps[5]};
+  return {lam * tr + 2 * g * eps[0],
+          lam * tr + 2 * g * eps[1],
+          lam * tr + 2 * g * eps[2],
+          2 * g * eps[3],
+          2 * g * eps[4],
+          2 * g * eps[5]};
 }
 
 // max_k |a_k - b_k| over the six Voigt components.

@@ -116,7 +116,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         blo[k] = std::min(blo[k], other[k]);
         bhi[k] = std::max(bhi[k], other[k]);
       }
-      std::vector<Interval> iv;
+      std::vector<Interval> iv, cover;  // bound blocks; every block the bar touches (coverage)
       for (std::size_t b = 0; b < m.n_blocks(); ++b) {
         const double tol = 1e-6 * m.block_size[b];
         bool overlap = true;
@@ -128,7 +128,9 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         // Keep a block only when the bar runs inside it over a real length (1e-4 L_c), so a
         // block that touches the bar at a corner or at the bar's end point is not bound, while
         // a bar along a face or edge (widened by tol) binds the blocks on both sides.
-        if (clip(m, bi, bar.start, d, tol, s0, s1) && (s1 - s0) * bar.length > 1e-4 * m.block_size[b]) {
+        if (!clip(m, bi, bar.start, d, tol, s0, s1)) continue;
+        cover.push_back({s0, s1, bi});
+        if ((s1 - s0) * bar.length > 1e-4 * m.block_size[b]) {
           if (!m.block_materials[m.block_material[b]].explosive.empty())
             throw InputError(fmt::format("{}: the bar runs through explosive blocks (region '{}'); "
                                          "a bar charge needs rock around it: give the region a rock "
@@ -137,11 +139,12 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
           iv.push_back({s0, s1, bi});
         }
       }
-      // ---- coverage: the bar must lie inside the mesh over its whole length ----
-      std::sort(iv.begin(), iv.end(), [](const Interval& a, const Interval& b) { return a.s0 < b.s0; });
+      // ---- coverage: the bar must lie inside the mesh over its whole length (checked with every
+      // block it touches, so passing a vertex closely is not mistaken for a void) ----
+      std::sort(cover.begin(), cover.end(), [](const Interval& a, const Interval& b) { return a.s0 < b.s0; });
       double reach = 0.0;
       const double gap_tol = 1e-6;
-      for (const auto& x : iv) {
+      for (const auto& x : cover) {
         if (x.s0 > reach + gap_tol) break;
         reach = std::max(reach, x.s1);
       }

@@ -230,8 +230,8 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
                                    "(explosive, length) from the bottom up",
                                    t.where("charge"), h.name));
     if (s > h.length() * (1 + 1e-9))
-      throw InputError(fmt::format("{}: the charges and stemming of hole '{}' add up to {} m, "
-                                   "longer than the hole ({} m)",
+      throw InputError(fmt::format("{}: the charges and stemming of hole '{}' add up to {:.6g} m, "
+                                   "longer than the hole ({:.6g} m)",
                                    t.where("charge"), h.name, s, h.length()));
     if (s < h.length()) h.stemming.emplace_back(s, h.length());  // top stemming (not modelled)
     for (const auto& o : c.holes)

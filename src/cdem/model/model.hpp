@@ -78,6 +78,8 @@ struct Model {
   std::vector<double> sp_w;                    // irreversible opening (m), fracture-energy law
   std::vector<double> sp_slip;                 // accumulated plastic slip (m)
   std::vector<double> sp_dil;                  // dilation opening (m)
+  std::vector<double> sp_g0;                   // normal offset carrying an in-situ preload (m);
+                                               // empty when there is no initial stress
   std::vector<std::uint8_t> sp_state;          // SpringState
   std::vector<std::uint8_t> sp_mode;           // BreakMode
   std::vector<float> sp_break_time;            // s (-1 intact)

@@ -96,7 +96,7 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
   if (fs_proj > 0) sp.fs *= fs_old / fs_proj;
   const double du_n = dot(du, n);
   sp.fs += sp.ks * (du - du_n * n);
-  const double dn = dot(d, n);
+  const double dn = dot(d, n) + sp.g0;
   if (sp.state == kBroken) {
     if (norm(d) > release_distance) {
       sp.state = kReleased;
@@ -123,13 +123,23 @@ void spring_forces(Model& m, double dt, double t) {
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < ni; ++i) {
     const std::int64_t s0 = i * np;
-    Vec3 pa[3], pb[3];
+    Vec3 pa[3], pb[3], qa[3], qb[3];  // current and previous (x - v dt) positions
     for (int q = 0; q < np; ++q) {
-      pa[q] = m.x[m.sp_a[s0 + q]];
-      pb[q] = m.x[m.sp_b[s0 + q]];
+      const auto a = m.sp_a[s0 + q], b = m.sp_b[s0 + q];
+      pa[q] = m.x[a];
+      pb[q] = m.x[b];
+      qa[q] = pa[q] - dt * m.v[a];
+      qb[q] = pb[q] - dt * m.v[b];
     }
     const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(pa, np), np) +
                               face_area_vector(std::span<const Vec3>(pb, np), np));
+    const Vec3 n_old = normalized(face_area_vector(std::span<const Vec3>(qa, np), np) +
+                                  face_area_vector(std::span<const Vec3>(qb, np), np));
+    // The interface's spin over the step. A change of more than 0.1 rad in one step is not a
+    // rotation but a degenerate or flipping face (an inverted block): no correction then.
+    Vec3 dn_vec = n - n_old;
+    if (dot(dn_vec, dn_vec) > 0.01) dn_vec = {};
+    const double* g0 = m.sp_g0.empty() ? nullptr : m.sp_g0.data();
     const SpringLaw& law = m.spring_laws[m.iface_material[i]];
     for (int q = 0; q < np; ++q) {
       const std::int64_t s = s0 + q;
@@ -140,7 +150,10 @@ void spring_forces(Model& m, double dt, double t) {
       }
       const auto a = m.sp_a[s], b = m.sp_b[s];
       const Vec3 d = pb[q] - pa[q];
-      const Vec3 du = dt * (m.v[b] - m.v[a]);
+      // Objective increment: remove the part of the relative motion that only carries the
+      // normal gap d_n around with the spinning interface.
+      const Vec3 du = dt * (m.v[b] - m.v[a]) - dot(d, n) * dn_vec;
+      const double off = g0 ? g0[s] : 0.0;
       // Fast path: an intact spring point under a linear law (elastic, or Mohr-Coulomb before
       // it breaks) stores energy without dissipating it, so only its forces are updated. Any
       // other state (breaking now, broken, softening) takes the full update with the
@@ -153,7 +166,7 @@ void spring_forces(Model& m, double dt, double t) {
         if (fs_proj > 0) fs *= fs_old / fs_proj;
         const double ks = m.sp_ks[s];
         fs += ks * (du - dot(du, n) * n);
-        const double fn = m.sp_kn[s] * dot(d, n);
+        const double fn = m.sp_kn[s] * (dot(d, n) + off);
         const double area = m.sp_area[s];
         const bool holds = law.law == InterfaceLaw::Elastic ||
                            (fn < law.ft * area && norm(fs) < law.c * area - fn * law.tan_phi);
@@ -166,7 +179,7 @@ void spring_forces(Model& m, double dt, double t) {
       }
       SpringPoint sp{m.sp_kn[s],   m.sp_ks[s],   m.sp_area[s],  m.sp_fn[s],
                      m.sp_fs[s],   m.sp_w[s],    m.sp_slip[s],  m.sp_dil[s],
-                     state,        m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s]};
+                     state,        m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
       const double release = m.release_distance_factor * 0.5 *
                              (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
       m.sp_force[s] = update_spring_point(sp, law, d, du, n, t, release, m.sp_force[s]);

@@ -1,8 +1,12 @@
 // Interface spring points (SPEC 1.3, eq. 7): per spring point joining node a (block A) and
 // node b (block B), with n the unit normal of the interface (average of the two current face
 // normals, pointing from A to B):
-//   normal force   F_n = k_n A_c (d_n - w - d_dil),  d_n = (x_b - x_a) . n   (tension positive)
-//   shear force    F_s += k_s A_c du_s, du_s the tangential part of (v_b - v_a) dt, F_s kept in
+//   normal force   F_n = k_n A_c (d_n + g0 - w - d_dil),  d_n = (x_b - x_a) . n  (tension
+//                  positive; g0 the offset that carries an initial in-situ normal force)
+//   shear force    F_s += k_s A_c du_s, du_s the tangential part of the objective relative
+//                  displacement increment (v_b - v_a) dt - d_n (n - n_old): the spin of the
+//                  interface carrying the gap d_n along is removed, so a rigid rotation adds no
+//                  shear (n_old is rebuilt from the previous positions x - v dt); F_s is kept in
 //                  the current tangent plane (rotated with the interface, magnitude preserved).
 // The normal force is written in total form (the relative displacement of the two coincident
 // nodes along the current normal): for intact springs this equals the incremental update of
@@ -32,10 +36,13 @@ struct SpringPoint {
   std::uint8_t state, mode;
   float break_time;
   double dissipated;            // J
+  double g0 = 0;                // normal offset (m): F_n = k_n A_c (d_n + g0 - w - d_dil); set by
+                                // an initial (in-situ) stress, F_n0 / (k_n A_c)
 };
 
-// Updates one spring point. d = x_b - x_a, du = (v_b - v_a) dt, n the unit normal, t the
-// current time, release_distance in m. Returns the force on node a (b gets minus it).
+// Updates one spring point. d = x_b - x_a, du = the objective relative displacement increment
+// (see above), n the unit normal, t the current time, release_distance in m. Returns the force
+// on node a (b gets minus it).
 Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
                          double release_distance, Vec3 force_old);
 

@@ -89,7 +89,9 @@ std::size_t model_bytes(const Model& m);
 // kernel reads counts once with its full size, every array it writes once more, as if each
 // kernel streamed its arrays from memory with perfect reuse inside the kernel and none between
 // kernels. Small serial parts (boundary facets, constraints) are left out; the bar loads count
-// the loaded blocks only.
+// the loaded blocks only. The spring-state arrays only the full spring update touches (not the
+// fast path of intact linear spring points) count for the fraction of spring points that take
+// it in the current state.
 struct StepBytes {
   double positions = 0, blocks = 0, springs = 0, gather = 0, loads = 0, integrate = 0;
   double total() const { return positions + blocks + springs + gather + loads + integrate; }

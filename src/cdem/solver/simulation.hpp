@@ -74,7 +74,6 @@ class Simulation {
   void add_load(LoadHook hook) { loads_.push_back(std::move(hook)); }
   // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it.
   void limit_dt(double dt_max, const std::string& what);
-  void add_explosive_work(double w) { w_explosive_ += w; }
 
  private:
   void setup_damping_zones(const Case& c);
@@ -91,6 +90,7 @@ class Simulation {
   std::int32_t first_inverted_ = -1;
   std::vector<double> node_dissipated_, ke_;
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
+  double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;  // increments of the last step
 };
 
 }  // namespace cdem

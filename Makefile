@@ -23,8 +23,10 @@ build: configure
 demo: build
 	bash scripts/demo.sh $(BUILD)/bin/cdemblast runs/demo
 
+# ctest runs tests in parallel, each with OpenMP threads: passive waiting keeps the threads of
+# one test from spinning while another test holds the cores (10-100x slower otherwise).
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	cd $(BUILD) && OMP_WAIT_POLICY=PASSIVE ctest --output-on-failure -j $(JOBS)
 
 format:
 	find src apps tests bench -name '*.[ch]pp' | xargs clang-format -i

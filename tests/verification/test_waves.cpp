@@ -86,11 +86,11 @@ Mesh bar_mesh(int nx, int ny, double h) {
 }
 
 struct WaveResult {
-  double c_measured = 0;   // m/s
-  double c_predicted = 0;  // m/s, series-spring formula above
+  double c_measured = 0;     // m/s
+  double c_predicted = 0;    // m/s, series-spring formula above
   double sigma_plateau = 0;  // Pa, mean sigma_xx behind the front at x1 (expected -p0)
-  double v_measured = 0;   // m/s, mean particle velocity behind the front at x1
-  double v_predicted = 0;  // p0 / (rho c_eff)
+  double v_measured = 0;     // m/s, mean particle velocity behind the front at x1
+  double v_predicted = 0;    // p0 / (rho c_eff)
   double dt = 0;
   std::int64_t steps = 0;
   std::size_t blocks = 0;
@@ -196,13 +196,13 @@ WaveResult run_bar(double alpha) {
   r.steps = sim.steps();
   r.blocks = m.n_blocks();
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  std::printf("[p-wave alpha=%g] blocks %zu, dt %.4g s (%s), steps %lld, wall %.2f s\n"
-              "  c_measured %.2f m/s, c_eff predicted %.2f m/s (c_p %.2f), error %+.3f %%\n"
-              "  v_measured %.5f m/s, predicted %.5f m/s, error %+.3f %%; sigma_xx plateau %.5g Pa\n",
-              alpha, r.blocks, r.dt, sim.stable().limit.c_str(), static_cast<long long>(r.steps),
-              r.wall_s, r.c_measured, r.c_predicted, rock.cp(),
-              100 * (r.c_measured / r.c_predicted - 1), r.v_measured, r.v_predicted,
-              100 * (r.v_measured / r.v_predicted - 1), r.sigma_plateau);
+  std::printf(
+      "[p-wave alpha=%g] blocks %zu, dt %.4g s (%s), steps %lld, wall %.2f s\n"
+      "  c_measured %.2f m/s, c_eff predicted %.2f m/s (c_p %.2f), error %+.3f %%\n"
+      "  v_measured %.5f m/s, predicted %.5f m/s, error %+.3f %%; sigma_xx plateau %.5g Pa\n",
+      alpha, r.blocks, r.dt, sim.stable().limit.c_str(), static_cast<long long>(r.steps), r.wall_s,
+      r.c_measured, r.c_predicted, rock.cp(), 100 * (r.c_measured / r.c_predicted - 1),
+      r.v_measured, r.v_predicted, 100 * (r.v_measured / r.v_predicted - 1), r.sigma_plateau);
   return r;
 }
 

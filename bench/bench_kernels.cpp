@@ -31,9 +31,9 @@ using bench_models::Shape;
 // items per iteration, the per-block time counter and the thread count.
 void finish(benchmark::State& state, std::int64_t items, std::size_t blocks) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * items);
-  state.counters["t_per_block"] =
-      benchmark::Counter(static_cast<double>(blocks),
-                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["t_per_block"] = benchmark::Counter(
+      static_cast<double>(blocks),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["threads"] = omp_get_max_threads();
 }
 
@@ -162,14 +162,15 @@ void BM_SimulationStep(benchmark::State& state, Shape shape) {
       static_cast<double>(m.n_springs()), benchmark::Counter::kIsIterationInvariantRate);
   std::int64_t broken = 0;
   for (auto s : m.sp_state) broken += s != kIntact;
-  state.counters["broken_at_end"] = static_cast<double>(broken) / static_cast<double>(m.n_springs());
+  state.counters["broken_at_end"] =
+      static_cast<double>(broken) / static_cast<double>(m.n_springs());
 }
 
-BENCHMARK_CAPTURE(BM_BlockForcesTet, strain_5e-4, 5e-4)
+BENCHMARK_CAPTURE(BM_BlockForcesTet, mid_strain, 5e-4)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BlockForcesTet, near_rigid, 0.0)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_BlockForcesTet, strain_5e-3, 5e-3)
+BENCHMARK_CAPTURE(BM_BlockForcesTet, high_strain, 5e-3)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BlockForcesTri)->UseRealTime()->Unit(benchmark::kMillisecond);
@@ -198,7 +199,9 @@ BENCHMARK(BM_Integrate)->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpdatePositions)->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BarLoads)->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_SimulationStep, tet, Shape::Tet)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_SimulationStep, quad, Shape::Quad)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SimulationStep, quad, Shape::Quad)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace cdem

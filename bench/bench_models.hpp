@@ -4,7 +4,7 @@
 // All are structured (no Gmsh, the same on every machine; builders in solver/bench.hpp) with
 // cells of h = 0.05 m and about kBlocks blocks:
 //   tet:  17 x 17 x 17 cubes, each split into the 6 Kuhn tetrahedra: 29 478 tets
-//   tri:  122 x 122 squares, each split into 2 triangles:             29 768 triangles
+//   tri:  122 x 123 squares, each split into 2 triangles:             30 012 triangles
 //   quad: 173 x 173 squares:                                          29 929 quadrilaterals
 // Rock: granite of SPEC 5.3 (E 99.3 GPa, nu 0.28, rho 2681); interfaces with the SPEC 5.3
 // strengths (f_t 8.11 MPa, c 20 MPa, phi 35 deg, G_t 70, G_s 700 Pa.m), the law chosen per
@@ -104,8 +104,15 @@ struct SpringState {
   std::vector<std::uint8_t> state, mode;
   std::vector<float> break_time;
   explicit SpringState(const Model& m)
-      : fn(m.sp_fn), w(m.sp_w), slip(m.sp_slip), dil(m.sp_dil), dissipated(m.sp_dissipated),
-        fs(m.sp_fs), force(m.sp_force), state(m.sp_state), mode(m.sp_mode),
+      : fn(m.sp_fn),
+        w(m.sp_w),
+        slip(m.sp_slip),
+        dil(m.sp_dil),
+        dissipated(m.sp_dissipated),
+        fs(m.sp_fs),
+        force(m.sp_force),
+        state(m.sp_state),
+        mode(m.sp_mode),
         break_time(m.sp_break_time) {}
   void restore(Model& m) const {
     std::copy(fn.begin(), fn.end(), m.sp_fn.begin());

@@ -68,8 +68,8 @@ void add_box_face_sets(Mesh& mesh) {
   if (mesh.dim == 2)
     sides = {{"left", 0, lo.x}, {"right", 0, hi.x}, {"bottom", 1, lo.y}, {"top", 1, hi.y}};
   else
-    sides = {{"left", 0, lo.x},  {"right", 0, hi.x},  {"front", 1, lo.y},
-             {"back", 1, hi.y},  {"bottom", 2, lo.z}, {"top", 2, hi.z}};
+    sides = {{"left", 0, lo.x}, {"right", 0, hi.x},  {"front", 1, lo.y},
+             {"back", 1, hi.y}, {"bottom", 2, lo.z}, {"top", 2, hi.z}};
   const double tol = 1e-12 * (norm(hi - lo) + 1.0);
   for (const auto& s : sides) {
     FaceSet fs;
@@ -334,9 +334,9 @@ std::size_t model_bytes(const Model& m) {
        bytes_of(m.iface_area0) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area) +
        bytes_of(m.sp_kn) + bytes_of(m.sp_ks) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
        bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_g0) +
-       bytes_of(m.sp_state) +
-       bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) + bytes_of(m.sp_dissipated) +
-       bytes_of(m.sp_force) + bytes_of(m.node_sp_offset) + bytes_of(m.node_sp_list);
+       bytes_of(m.sp_state) + bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) +
+       bytes_of(m.sp_dissipated) + bytes_of(m.sp_force) + bytes_of(m.node_sp_offset) +
+       bytes_of(m.node_sp_list);
   b += bytes_of(m.block_materials) + bytes_of(m.iface_materials) + bytes_of(m.spring_laws) +
        bytes_of(m.region_names) + bytes_of(m.facet_sets);
   for (const auto& s : m.facet_sets) b += bytes_of(s.facets);
@@ -374,8 +374,8 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
                    2 * (size_of(m.sp_w) + size_of(m.sp_slip) + size_of(m.sp_dil) +
                         size_of(m.sp_mode) + size_of(m.sp_break_time) + size_of(m.sp_dissipated)));
   // gather_spring_forces: read the CSR list and the spring forces; read and write f.
-  s.gather = size_of(m.node_sp_offset) + size_of(m.node_sp_list) + size_of(m.sp_force) +
-             2 * size_of(m.f);
+  s.gather =
+      size_of(m.node_sp_offset) + size_of(m.node_sp_list) + size_of(m.sp_force) + 2 * size_of(m.f);
   // bar loads: per loaded block, read x of its 4 nodes, read and write f, and the AppliedLoads
   // record (node, force, old velocity) per node.
   s.loads = static_cast<double>(loaded_blocks) * 4.0 *
@@ -428,15 +428,17 @@ enum Kernel {
   kNumKernels
 };
 constexpr const char* kKernelNames[kNumKernels] = {
-    "update_positions", "block_forces", "spring_forces", "gather_spring_forces",
-    "explosive_loads",  "boundary_forces", "integrate",   "constraints_and_work"};
+    "update_positions", "block_forces",    "spring_forces", "gather_spring_forces",
+    "explosive_loads",  "boundary_forces", "integrate",     "constraints_and_work"};
 
 struct LoopResult {
   int threads = 0;
-  double wall = 0;                     // s, whole loop
-  double cpu = 0;                      // s, CPU time of the process over the loop
-  std::array<double, kNumKernels> k{}; // s per kernel, summed over the steps
+  double wall = 0;                      // s, whole loop
+  double cpu = 0;                       // s, CPU time of the process over the loop
+  std::array<double, kNumKernels> k{};  // s per kernel, summed over the steps
   std::int64_t broken_end = 0;
+  std::int64_t inverted = 0;  // inverted blocks summed over the steps (expected 0)
+  double work = 0;            // boundary + explosive work, absorbed energy (J)
 };
 
 double process_cpu_seconds() {
@@ -495,7 +497,7 @@ LoopResult timed_loop(const Model& snapshot, const BarCharges& bars0, const Boun
     lap(kLoads);
     boundary_forces(m, bc, t);
     lap(kBoundary);
-    integrate(m, Vec3{}, dt, dissipated, nullptr);
+    integrate(m, bc.gravity, dt, dissipated, nullptr);
     lap(kIntegrate);
     w_boundary += apply_constraints(m, bc, t + 0.5 * dt, dt);
     for (std::size_t i = 0; i < applied.node.size(); ++i)
@@ -514,6 +516,8 @@ LoopResult timed_loop(const Model& snapshot, const BarCharges& bars0, const Boun
   r.wall = omp_get_wtime() - w0;
   r.cpu = process_cpu_seconds() - cpu0;
   r.broken_end = broken_springs(m);
+  r.inverted = inverted;
+  r.work = w_boundary + w_explosive + w_absorbed;
   return r;
 }
 
@@ -554,7 +558,8 @@ int run_bench(const BenchOptions& opt) {
 
   // Warm-up: step until cracking is under way (0.5 % of the spring points broken), at most
   // 20 x steps + 2000 steps.
-  const std::int64_t want_broken = std::max<std::int64_t>(1, static_cast<std::int64_t>(0.005 * nsp));
+  const std::int64_t want_broken =
+      std::max<std::int64_t>(1, static_cast<std::int64_t>(0.005 * nsp));
   const std::int64_t max_warm = 20LL * steps + 2000;
   const double warm0 = omp_get_wtime();
   std::int64_t warm_steps = 0, broken0 = 0;
@@ -575,7 +580,8 @@ int run_bench(const BenchOptions& opt) {
   const LoopResult r1 = best_loop(snapshot, bars, bc, t0, dt, steps, 1, kReps);
   const LoopResult r2 = best_loop(snapshot, bars, bc, t0, dt, steps, 2, kReps);
   LoopResult rm = threads == 1 ? r1 : r2;
-  if (threads != 1 && threads != 2) rm = best_loop(snapshot, bars, bc, t0, dt, steps, threads, kReps);
+  if (threads != 1 && threads != 2)
+    rm = best_loop(snapshot, bars, bc, t0, dt, steps, threads, kReps);
 
   // The real Simulation::step on the same state and thread count, for comparison.
   omp_set_num_threads(threads);
@@ -586,6 +592,10 @@ int run_bench(const BenchOptions& opt) {
   // Memory bandwidth: triad over 3 x 80 MB, 2 threads, best of 5.
   const std::size_t triad_n = 10'000'000;
   const double triad = bench::triad_bandwidth(triad_n, 2, 5);
+  // The same at the size of the model's arrays (3 arrays of model_bytes / 3 in all): the
+  // bandwidth of the cache level the step's working set lives in.
+  const std::size_t triad_ws_n = std::max<std::size_t>(1024, mem / (3 * sizeof(double)));
+  const double triad_ws = bench::triad_bandwidth(triad_ws_n, 2, 20);
   omp_set_num_threads(threads);
 
   const auto bytes = bench::estimate_step_bytes(snapshot, bars.elem_block.size());
@@ -623,17 +633,18 @@ int run_bench(const BenchOptions& opt) {
             "\"ns_per_block_step_1_thread\": {:.4g}, \"ns_per_block_step_2_threads\": {:.4g}, "
             "\"speedup_2_threads\": {:.4g}, \"simulation_step_ns_per_block\": {:.4g}, "
             "\"bytes_per_block\": {:.1f}, \"bytes_per_block_with_solver\": {:.1f}, "
-            "\"triad_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
+            "\"triad_gb_s\": {:.4g}, \"triad_ws_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
             "\"step_gb_s_estimate\": {:.4g}, \"bandwidth_fraction\": {:.4g}, "
-            "\"polar_iterations\": {:.3g}, \"cpu_ns_per_block_step_1_thread\": {:.4g}, "
+            "\"bandwidth_fraction_ws\": {:.4g}, \"polar_iterations\": {:.3g}, "
+            "\"cpu_ns_per_block_step_1_thread\": {:.4g}, "
             "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
             "\"load_average\": [{:.2f}, {:.2f}], \"kernels\": {{{}}}}}",
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
             warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
             r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup, sim_ns_block,
             static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
-            bytes.total(), step_gbs, step_gbs / triad, polar_it, cpu_ns_block_1, share1, share2,
-            load0, load1, kernels)
+            triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
+            cpu_ns_block_1, share1, share2, load0, load1, kernels)
             .c_str());
     return 0;
   }
@@ -652,11 +663,15 @@ int run_bench(const BenchOptions& opt) {
   out += fmt::format(
       "  warm-up: {} steps in {:.2f} s to t = {:.4g} s: {} spring points broken ({:.2f} %)\n",
       warm_steps, warm_s, t0, broken0, 100.0 * static_cast<double>(broken0) / nsp);
-  out += fmt::format("  mean Newton iterations of the tet polar decomposition at that state: {:.2f}\n",
-                     polar_it);
-  out += fmt::format("  timed: {} steps per run, best of {} runs from the same state; {} broken "
-                     "at the end ({:.2f} %)\n\n",
-                     steps, kReps, rm.broken_end, 100.0 * static_cast<double>(rm.broken_end) / nsp);
+  out += fmt::format(
+      "  mean Newton iterations of the tet polar decomposition at that state: {:.2f}\n", polar_it);
+  out += fmt::format(
+      "  timed: {} steps per run, best of {} runs from the same state; {} broken "
+      "at the end ({:.2f} %)\n\n",
+      steps, kReps, rm.broken_end, 100.0 * static_cast<double>(rm.broken_end) / nsp);
+  if (rm.inverted > 0)
+    out +=
+        fmt::format("  WARNING: {} inverted block-steps during the timed steps\n\n", rm.inverted);
   out += fmt::format("throughput ({} thread{}):\n", threads, threads == 1 ? "" : "s");
   out += fmt::format("  block-steps/s          {:.4g}\n", block_rate);
   out += fmt::format("  spring-point-steps/s   {:.4g}\n", spring_rate);
@@ -671,8 +686,8 @@ int run_bench(const BenchOptions& opt) {
                      "share", "1T ns/block");
   for (int k = 0; k < kNumKernels; ++k)
     out += fmt::format("  {:<22} {:>9.3f} {:>10.2f} {:>6.1f}% {:>12.2f}\n", kKernelNames[k],
-                       rm.k[k] / steps * 1e3, rm.k[k] / (nb * steps) * 1e9,
-                       100.0 * rm.k[k] / ksum, r1.k[k] / (nb * steps) * 1e9);
+                       rm.k[k] / steps * 1e3, rm.k[k] / (nb * steps) * 1e9, 100.0 * rm.k[k] / ksum,
+                       r1.k[k] / (nb * steps) * 1e9);
   out += fmt::format("  {:<22} {:>9.3f} {:>10.2f} {:>7} {:>12.2f}\n\n", "sum", ksum / steps * 1e3,
                      ksum / (nb * steps) * 1e9, "", ksum1 / (nb * steps) * 1e9);
   out += fmt::format(
@@ -686,8 +701,9 @@ int run_bench(const BenchOptions& opt) {
   out += fmt::format("  load average {:.2f} at the start, {:.2f} at the end ({} cores)\n", load0,
                      load1, omp_get_num_procs());
   if (share1 < 0.9 || share2 < 0.9 || load1 > omp_get_num_procs())
-    out += "  WARNING: the machine is busy (other processes share the cores): wall times, the\n"
-           "  speed-up and the bandwidth fraction are pessimistic; compare CPU times.\n";
+    out +=
+        "  WARNING: the machine is busy (other processes share the cores): wall times, the\n"
+        "  speed-up and the bandwidth fraction are pessimistic; compare CPU times.\n";
   out += fmt::format(
       "memory: Model {:.0f} bytes per block (target <= 1024), {:.0f} with the solver's per-node "
       "arrays\n",
@@ -695,12 +711,17 @@ int run_bench(const BenchOptions& opt) {
   out += fmt::format(
       "bandwidth: triad a = b + s c, 3 x {:.0f} MB, 2 threads, best of 5: {:.2f} GB/s\n",
       triad_n * 8.0 / 1e6, triad);
+  out += fmt::format("  the same over the model's size (3 x {:.1f} MB), best of 20: {:.2f} GB/s\n",
+                     triad_ws_n * 8.0 / 1e6, triad_ws);
   out += fmt::format(
       "  step touches ~{:.1f} MB ({:.0f} B per block; estimate: each array a kernel reads or "
       "writes counted once per kernel)\n",
       bytes.total() / 1e6, bytes.total() / nb);
-  out += fmt::format("  -> {:.2f} GB/s at {} thread{} = {:.0f} % of the triad\n", step_gbs, threads,
-                     threads == 1 ? "" : "s", 100.0 * step_gbs / triad);
+  out += fmt::format(
+      "  -> {:.2f} GB/s at {} thread{} = {:.0f} % of the triad ({:.0f} % of the model-size "
+      "triad); 1 thread: {:.2f} GB/s of CPU time\n",
+      step_gbs, threads, threads == 1 ? "" : "s", 100.0 * step_gbs / triad,
+      100.0 * step_gbs / triad_ws, bytes.total() * steps / r1.cpu / 1e9);
   std::fputs(out.c_str(), stdout);
   return 0;
 }

@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
   bench->add_option("--blocks", bench_opt.blocks, "Approximate number of blocks (default 30000)")
       ->check(CLI::PositiveNumber);
   bench->add_option("--steps", bench_opt.steps, "Timed steps (default 200)")->check(CLI::PositiveNumber);
-  bench->add_option("--threads", bench_opt.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  bench->add_option("--threads", bench_opt.threads, "Threads (default: OMP_NUM_THREADS, else all cores)")->check(CLI::NonNegativeNumber);
   bench->add_flag("--json", bench_opt.json, "Print one JSON object");
 
   try {

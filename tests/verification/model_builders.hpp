@@ -17,6 +17,7 @@
 #include "cdem/io/case.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 #include "cdem/mesh/mesh.hpp"
+#include "cdem/mesh/structured.hpp"
 #include "cdem/mesh/topology.hpp"
 #include "cdem/model/materials.hpp"
 #include "cdem/model/model.hpp"
@@ -57,56 +58,6 @@ inline InterfaceMaterial interface_of(InterfaceLaw law, double ft = 5e6, double 
 // ---------------------------------------------------------------------------------------------
 // Meshes
 // ---------------------------------------------------------------------------------------------
-
-// Boundary face sets of an axis-aligned box mesh: every facet (element face or edge used by one
-// element only) whose vertices all lie on a side of the bounding box goes to that side's set:
-// 2D "left" "right" "bottom" "top"; 3D the same with "front" (y min), "back" (y max), and
-// "bottom"/"top" at z min/max (the names of generate_mesh).
-inline void add_box_face_sets(Mesh& mesh) {
-  std::map<std::array<std::int32_t, 3>, std::pair<int, Facet>> count;
-  for (std::size_t e = 0; e < mesh.num_elements(); ++e) {
-    const LocalFaces lf = local_faces(mesh.elem_type[e]);
-    for (int k = 0; k < lf.count; ++k) {
-      Facet f;
-      for (int i = 0; i < lf.nodes_per_face; ++i) f.v[i] = mesh.elem_vertices[e][lf.f[k][i]];
-      auto key = f.v;
-      std::sort(key.begin(), key.begin() + lf.nodes_per_face);
-      auto& c = count[key];
-      c.first += 1;
-      c.second = f;
-    }
-  }
-  Vec3 lo = mesh.vertices[0], hi = mesh.vertices[0];
-  for (const auto& p : mesh.vertices)
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::min(lo[d], p[d]);
-      hi[d] = std::max(hi[d], p[d]);
-    }
-  struct Side {
-    std::string name;
-    int axis;
-    double value;
-  };
-  std::vector<Side> sides;
-  if (mesh.dim == 2)
-    sides = {{"left", 0, lo.x}, {"right", 0, hi.x}, {"bottom", 1, lo.y}, {"top", 1, hi.y}};
-  else
-    sides = {{"left", 0, lo.x}, {"right", 0, hi.x},  {"front", 1, lo.y},
-             {"back", 1, hi.y}, {"bottom", 2, lo.z}, {"top", 2, hi.z}};
-  const double tol = 1e-12 * (norm(hi - lo) + 1.0);
-  for (const auto& s : sides) {
-    FaceSet fs;
-    fs.name = s.name;
-    for (const auto& [key, c] : count) {
-      if (c.first != 1) continue;
-      bool on = true;
-      for (int i = 0; i < c.second.count(); ++i)
-        on = on && std::abs(mesh.vertices[c.second.v[i]][s.axis] - s.value) <= tol;
-      if (on) fs.facets.push_back(c.second);
-    }
-    mesh.face_sets.push_back(std::move(fs));
-  }
-}
 
 // nx x ny quadrilaterals (counter-clockwise) of size lx/nx x ly/ny from `origin`, one region.
 inline Mesh quad_grid(int nx, int ny, double lx, double ly, Vec3 origin = {},
@@ -162,40 +113,7 @@ inline Mesh tri_grid(int nx, int ny, double lx, double ly, Vec3 origin = {},
 // volumes; their nodes 1 and 2 are swapped so that every tet is positive (right-handed).
 inline Mesh tet_box(int nx, int ny, int nz, double lx, double ly, double lz, Vec3 origin = {},
                     const std::string& region = "rock") {
-  Mesh m;
-  m.dim = 3;
-  m.region_names = {region};
-  for (int k = 0; k <= nz; ++k)
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i)
-        m.vertices.push_back(
-            {origin.x + lx * i / nx, origin.y + ly * j / ny, origin.z + lz * k / nz});
-  auto vid = [&](int i, int j, int k) {
-    return static_cast<std::int32_t>((k * (ny + 1) + j) * (nx + 1) + i);
-  };
-  const std::array<std::array<int, 3>, 6> perms{
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (const auto& p : perms) {
-          std::array<int, 3> c{i, j, k};
-          std::array<std::int32_t, 4> t{};
-          t[0] = vid(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
-            t[s + 1] = vid(c[0], c[1], c[2]);
-          }
-          const Vec3 a = m.vertices[t[0]], b = m.vertices[t[1]], cc = m.vertices[t[2]],
-                     d = m.vertices[t[3]];
-          if (dot(b - a, cross(cc - a, d - a)) < 0) std::swap(t[1], t[2]);
-          m.elem_type.push_back(ElemType::Tet4);
-          m.elem_vertices.push_back(t);
-          m.elem_region.push_back(0);
-          m.elem_tag.push_back(static_cast<std::int64_t>(m.elem_tag.size() + 1));
-        }
-  add_box_face_sets(m);
-  return m;
+  return structured_tet_box(nx, ny, nz, {lx, ly, lz}, origin, region);
 }
 
 // A single element of the given vertices (counter-clockwise in 2D, positive in 3D).

@@ -88,6 +88,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
   std::vector<std::string> eos_names;
   std::vector<std::vector<std::int32_t>> elem_segs;  // by block, filled sparsely
   std::vector<std::int32_t> elem_slot(m.n_blocks(), -1);
+  std::vector<double> vch(m.n_blocks(), 0.0);  // charge volume held by each block (m^3)
   std::vector<Vec3> lo(m.n_blocks()), hi(m.n_blocks());
   for (std::size_t b = 0; b < m.n_blocks(); ++b) block_bbox(m, static_cast<std::int32_t>(b), lo[b], hi[b]);
 
@@ -106,6 +107,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       bar.t0 = deck.delay;
       bar.length = deck.length;
       bar.attenuation = hole.attenuation_exponent;
+      bar.cavity = hole.cavity;
       bar.start = deck.initiation();
       const Vec3 other = deck.initiate_top ? deck.bottom : deck.top;
       bar.dir = normalized(other - bar.start);
@@ -155,6 +157,33 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
                                      "must lie inside rock elements over its whole length",
                                      where, reach * bar.length, p.x, p.y, p.z));
       }
+      // ---- the charge volume each bound block holds: the blocks bound over a stretch of the
+      // bar host the charge of that stretch together, each in proportion to the volume it
+      // brings to the stretch (its volume x the stretch's share of its bound length). So every
+      // block bound over a stretch has the same charge fraction phi = charge volume / host
+      // volume: 1 when the bound blocks exactly fill the hole, < 1 when they are larger ----
+      {
+        const double section = m.dim == 3 ? kPi * bar.r0 * bar.r0 : 2.0 * bar.r0;
+        std::vector<double> cuts;
+        for (const auto& x : iv) {
+          cuts.push_back(std::clamp(x.s0, 0.0, 1.0));
+          cuts.push_back(std::clamp(x.s1, 0.0, 1.0));
+        }
+        std::sort(cuts.begin(), cuts.end());
+        for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+          const double u0 = cuts[k], u1 = cuts[k + 1];
+          if (!(u1 > u0)) continue;
+          const double mid = 0.5 * (u0 + u1);
+          double host = 0;
+          for (const auto& x : iv)
+            if (x.s0 <= mid && mid <= x.s1) host += m.block_volume0[x.block] * (u1 - u0) / (x.s1 - x.s0);
+          if (!(host > 0)) continue;
+          const double phi = section * (u1 - u0) * bar.length / host;
+          for (const auto& x : iv)
+            if (x.s0 <= mid && mid <= x.s1)
+              vch[x.block] += phi * m.block_volume0[x.block] * (u1 - u0) / (x.s1 - x.s0);
+        }
+      }
       // ---- segmentation: no longer than the smallest crossed element ----
       double hmin = std::numeric_limits<double>::infinity();
       for (const auto& x : iv) hmin = std::min(hmin, m.block_size[x.block]);
@@ -176,8 +205,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
           if (elem_slot[x.block] < 0) {
             elem_slot[x.block] = static_cast<std::int32_t>(bc.elem_block.size());
             bc.elem_block.push_back(x.block);
-            const double att = std::pow(bar.r0 / m.block_size[x.block], bar.attenuation);
-            bc.elem_atten.push_back(std::min(1.0, att));
+            bc.elem_atten.push_back(0.0);  // set below, once every bar's share is known
             elem_segs.emplace_back();
           }
           elem_segs[elem_slot[x.block]].push_back(sj);
@@ -188,6 +216,31 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       bc.bars.push_back(bar);
     }
   }
+  // ---- attenuation (eq. 15) with L_c the element's equivalent radius about the bar: the radius
+  // of the cylinder (3D) or the half-width of the strip (plane strain) that has the element's
+  // volume and holds the element's share of the charge over the same length. Then
+  // (r0 / L_c)^2 = phi in 3D and r0 / L_c = phi in 2D, phi = charge volume / element volume:
+  // a charge that fills its element is not attenuated; one much smaller than its element is.
+  // (A size taken as the element's edge length would compare a radius with a diameter and
+  // attenuate even a charge that exactly fills its element.) ----
+  bc.elem_phi.resize(bc.elem_block.size());
+  bc.elem_cavity.assign(bc.elem_block.size(), 0);
+  std::size_t overfull = 0;
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+    const auto b = bc.elem_block[i];
+    const double phi = vch[b] / m.block_volume0[b];
+    bc.elem_phi[i] = phi;
+    const double r_over_lc = m.dim == 3 ? std::sqrt(phi) : phi;
+    const auto& bar = bc.bars[bc.seg_bar[elem_segs[i].front()]];
+    bc.elem_atten[i] = std::min(1.0, std::pow(r_over_lc, bar.attenuation));
+    if (phi > 1.5) ++overfull;
+  }
+  if (overfull > 0)
+    spdlog::warn("{}: {} of the {} blocks bound to bars are smaller than the charge they hold "
+                 "(charge volume > 1.5 x block volume): a bar loads only the blocks on its line, "
+                 "so part of the hole's wall is not loaded. The bar model is meant for blocks at "
+                 "least as large as the hole; use a coarser mesh at the holes or the solid model.",
+                 c.path, overfull, bc.elem_block.size());
   bc.elem_seg_offset.assign(1, 0);
   for (const auto& v : elem_segs) {
     bc.elem_seg.insert(bc.elem_seg.end(), v.begin(), v.end());
@@ -221,6 +274,45 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
     bc.elem_sigma[i] = pbar * bc.elem_atten[i];                             // eq. 15
     if (bc.elem_sigma[i] > 0) inflate_block(m, bc.elem_block[i], bc.elem_sigma[i], out);  // eq. 16
   }
+}
+
+double make_charge_cavities(Model& m, BarCharges& bc) {
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+    const auto b = bc.elem_block[i];
+    const auto& bar = bc.bars[bc.seg_bar[bc.elem_seg[bc.elem_seg_offset[i]]]];
+    const auto k = m.block_material[b];
+    const double lam = m.mat_lambda[k], G = m.mat_shear[k];
+    const double rho = m.block_materials[k].density;
+    double lam_c = lam, G_c = G, rho_c = rho;
+    if (bar.cavity) {
+      const double phi = std::min(1.0, bc.elem_phi[i]);
+      lam_c = (1.0 - phi) * lam;
+      G_c = (1.0 - phi) * G;
+      rho_c = (1.0 - phi) * rho + phi * explosive_density(bc.eos[bar.eos]);
+      BlockMaterial mat = m.block_materials[k];
+      mat.name = fmt::format("{} + charge '{}' (phi {:.3g})", mat.name, bar.hole, phi);
+      mat.density = rho_c;
+      m.block_materials.push_back(mat);
+      m.mat_lambda.push_back(lam_c);
+      m.mat_shear.push_back(G_c);
+      m.block_material[b] = static_cast<std::int32_t>(m.block_materials.size() - 1);
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+        m.mass[n] *= rho_c / rho;
+        m.inv_mass[n] = 1.0 / m.mass[n];
+      }
+      bc.elem_cavity[i] = 1;
+    }
+    // The products stiffen the block: K_eos = -dP/dv at v = 1 (tangent of the isentrope, by a
+    // central difference), attenuated like the pressure. The P-wave modulus of the block is
+    // then lambda' + 2G + att K_eos.
+    const auto& eos = bc.eos[bar.eos];
+    const double dv = 1e-4;
+    const double keos = (eos_pressure(eos, 1.0 - dv) - eos_pressure(eos, 1.0 + dv)) / (2.0 * dv);
+    const double c = std::sqrt((lam_c + 2.0 * G_c + bc.elem_atten[i] * keos) / rho_c);
+    dt = std::min(dt, m.block_altitude0[b] / c);
+  }
+  return dt;
 }
 
 SolidCharges build_solid_charges(const Model& m, const Case& c) {

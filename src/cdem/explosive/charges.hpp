@@ -37,6 +37,7 @@ struct BarCharges {
     int deck = 0;
     std::int32_t eos = 0;        // index into eos
     double r0 = 0, D = 0, t0 = 0, length = 0, h = 0, attenuation = 1.25;
+    bool cavity = true;          // the charge's share of a bound element is not rock (see below)
     Vec3 start, dir;             // initiation point and unit direction along the bar
     std::int32_t seg_begin = 0, seg_end = 0;
   };
@@ -50,6 +51,8 @@ struct BarCharges {
   // loaded elements
   std::vector<std::int32_t> elem_block;
   std::vector<double> elem_atten;                       // min(1, (r0 / L_c)^a)
+  std::vector<double> elem_phi;    // charge volume in the element / element volume (may be > 1)
+  std::vector<std::uint8_t> elem_cavity;  // 1: hollowed by make_charge_cavities
   std::vector<std::int32_t> elem_seg_offset, elem_seg;  // CSR: element -> segments
   std::vector<double> elem_sigma;                       // applied pressure (Pa)
 
@@ -60,6 +63,17 @@ struct BarCharges {
 // Builds the bars of every hole with model = "bar". Throws InputError naming the hole and deck
 // when a bar leaves the mesh or crosses a void.
 BarCharges build_bar_charges(const Model& m, const Case& c);
+
+// The charge occupies the fraction phi = min(1, elem_phi) of each bound element: that part of
+// the element is explosive (a fluid whose pressure is the EOS), not rock (docs/theory.md,
+// "Bar charges: the charge's share of the element"). For the bars with cavity = true, each
+// bound block gets its own copy of its material with the rock's Lame constants scaled by its
+// rock fraction (lambda' = (1 - phi) lambda, G' = (1 - phi) G: a Voigt mixture with a
+// stiffness-free charge) and the density mixed by volume ((1 - phi) rho_rock + phi rho_w);
+// the nodal masses follow. Call before the Simulation is built (time step, masses). Returns
+// the time-step bound of the bound blocks, with the products' tangent stiffness (attenuated)
+// added to their P-wave modulus (s; infinity if there are none).
+double make_charge_cavities(Model& m, BarCharges& bars);
 
 // Loads the rock at time t (adds to m.f through `out`).
 void bar_loads(Model& m, BarCharges& bars, AppliedLoads& out, double t);

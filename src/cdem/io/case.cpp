@@ -181,7 +181,7 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 
   for (const auto& t : top.array_of_tables("hole")) {
     t.check_known({"name", "collar", "end", "direction", "depth", "diameter", "model",
-                   "attenuation_exponent", "charge"});
+                   "attenuation_exponent", "cavity", "charge"});
     HoleDef h;
     h.name = t.string("name");
     h.collar = t.vec("collar");
@@ -201,6 +201,7 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
     h.diameter = t.positive("diameter");
     h.model = t.choice("model", {"bar", "solid"}, "bar") == "bar" ? ChargeModel::Bar : ChargeModel::Solid;
     h.attenuation_exponent = t.non_negative("attenuation_exponent", 1.25);
+    h.cavity = t.boolean("cavity", true);
     const Vec3 up = normalized(h.collar - h.end);
     double s = 0;  // distance from the bottom
     for (const auto& q : t.array_of_tables("charge")) {
@@ -548,9 +549,10 @@ std::string resolved_case_toml(const Case& c) {
   }
   for (const auto& h : c.holes) {
     o += fmt::format("\n[[hole]]\nname = {}\ncollar = {}\nend = {}\ndiameter = {:.17g}\nmodel = {}\n"
-                     "attenuation_exponent = {:.17g}\n",
+                     "attenuation_exponent = {:.17g}\ncavity = {}\n",
                      q(h.name), vec_str(h.collar), vec_str(h.end), h.diameter,
-                     q(h.model == ChargeModel::Bar ? "bar" : "solid"), h.attenuation_exponent);
+                     q(h.model == ChargeModel::Bar ? "bar" : "solid"), h.attenuation_exponent,
+                     h.cavity);
     // Charges from the bottom up, stemming between them.
     std::vector<std::pair<double, std::string>> items;
     const Vec3 up = normalized(h.collar - h.end);

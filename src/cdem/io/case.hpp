@@ -82,6 +82,7 @@ struct HoleDef {
   double diameter = 0;      // m
   ChargeModel model = ChargeModel::Bar;
   double attenuation_exponent = 1.25;  // a in (r0 / L_c)^a (bar model)
+  bool cavity = true;       // bar model: the charge's share of a bound element is not rock
   std::vector<Deck> decks;
   std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
   double length() const { return norm(collar - end); }

@@ -89,11 +89,15 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   omp_set_num_threads(threads);
 
   Mesh mesh = load_mesh(c);
-  Simulation sim(build_case_model(c, mesh), c);
+  // Explosive loads: bars (SPEC 2) and solid charges (SPEC 3). Bars are bound before the
+  // simulation is set up: the blocks holding a charge change material (time step, masses).
+  Model model = build_case_model(c, mesh);
+  BarCharges bars = build_bar_charges(model, c);
+  const double bar_dt = make_charge_cavities(model, bars);
+  Simulation sim(std::move(model), c);
   const Model& m = sim.model();
   const auto monitors = locate_monitors(m, c);
-  // Explosive loads: bars (SPEC 2) and solid charges (SPEC 3).
-  BarCharges bars = build_bar_charges(m, c);
+  if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
   SolidCharges solids = build_solid_charges(m, c);
   if (!bars.empty()) sim.add_load([&bars](Model& mm, AppliedLoads& out, double t) { bar_loads(mm, bars, out, t); });
   if (!solids.empty()) {
@@ -114,9 +118,19 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     if (!charges_csv) throw std::runtime_error("cannot write charges.csv in " + opt.out_dir);
     write_charge_header(charges_csv);
   }
-  if (!opt.quiet && !bars.empty())
-    spdlog::info("bar charges: {} bars, {} segments, {} loaded blocks", bars.bars.size(),
-                 bars.n_segments(), bars.elem_block.size());
+  if (!opt.quiet && !bars.empty()) {
+    double phi_lo = 1e300, phi_hi = 0, att_lo = 1e300, att_hi = 0;
+    for (std::size_t i = 0; i < bars.elem_block.size(); ++i) {
+      phi_lo = std::min(phi_lo, bars.elem_phi[i]);
+      phi_hi = std::max(phi_hi, bars.elem_phi[i]);
+      att_lo = std::min(att_lo, bars.elem_atten[i]);
+      att_hi = std::max(att_hi, bars.elem_atten[i]);
+    }
+    spdlog::info("bar charges: {} bars, {} segments, {} loaded blocks; charge volume / block "
+                 "volume {:.3g} to {:.3g}, attenuation {:.3g} to {:.3g}",
+                 bars.bars.size(), bars.n_segments(), bars.elem_block.size(), phi_lo, phi_hi,
+                 att_lo, att_hi);
+  }
   if (!opt.quiet && !solids.empty())
     spdlog::info("solid charges: {} decks, {} explosive blocks", solids.charges.size(), solids.block.size());
   // Field output times: t = 0, every output_interval, the listed times, the end.

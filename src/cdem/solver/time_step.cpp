@@ -13,7 +13,9 @@ StableStep stable_time_step(const Model& m, double safety) {
   for (std::size_t b = 0; b < m.n_blocks(); ++b) {
     const auto& mat = m.block_materials[m.block_material[b]];
     if (!mat.explosive.empty()) continue;  // explosive blocks: limited by their EOS (issue 3)
-    const double d = m.block_altitude0[b] / mat.cp();
+    const auto k = m.block_material[b];
+    const double cp = std::sqrt((m.mat_lambda[k] + 2.0 * m.mat_shear[k]) / mat.density);
+    const double d = m.block_altitude0[b] / cp;
     if (d < s.dt_block) {
       s.dt_block = d;
       s.block = static_cast<std::int64_t>(b);

@@ -278,6 +278,7 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
 
 double make_charge_cavities(Model& m, BarCharges& bc) {
   double dt = std::numeric_limits<double>::infinity();
+  std::vector<std::uint8_t> full(m.n_blocks(), 0);  // blocks that are all charge (phi >= 1)
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     const auto b = bc.elem_block[i];
     const auto& bar = bc.bars[bc.seg_bar[bc.elem_seg[bc.elem_seg_offset[i]]]];
@@ -303,6 +304,7 @@ double make_charge_cavities(Model& m, BarCharges& bc) {
       }
       bc.elem_cavity[i] = 1;
     }
+    if (bar.cavity && bc.elem_phi[i] >= 1.0) full[b] = 1;
     // The products stiffen the block: K_eos = -dP/dv at v = 1 (tangent of the isentrope, by a
     // central difference), attenuated like the pressure. The P-wave modulus of the block is
     // then lambda' + 2G + att K_eos.
@@ -311,6 +313,25 @@ double make_charge_cavities(Model& m, BarCharges& bc) {
     const double keos = (eos_pressure(eos, 1.0 - dv) - eos_pressure(eos, 1.0 + dv)) / (2.0 * dv);
     const double c = std::sqrt((lam_c + 2.0 * G_c + bc.elem_atten[i] * keos) / rho_c);
     dt = std::min(dt, m.block_altitude0[b] / c);
+  }
+  // A block that is all charge holds no rock: like the solid model's explosive blocks (SPEC 3)
+  // it is joined to its neighbours by unbreakable interfaces (the hole wall confines the
+  // products; without it a stiffness-free block whose interfaces break has free nodes that the
+  // pressure throws apart). Blocks that are partly rock keep the rock's interfaces.
+  std::int32_t contact = -1;
+  for (std::size_t f = 0; f < m.n_ifaces(); ++f) {
+    if (!full[m.iface_block_a[f]] && !full[m.iface_block_b[f]]) continue;
+    if (contact < 0) {
+      InterfaceMaterial im;
+      im.name = "charge_contact";
+      im.law = InterfaceLaw::Elastic;
+      m.iface_materials.push_back(im);
+      m.spring_laws.push_back(make_spring_law(im));
+      contact = static_cast<std::int32_t>(m.iface_materials.size() - 1);
+    }
+    m.iface_material[f] = contact;
+    for (int q = 0; q < m.springs_per_iface; ++q)
+      m.sp_state[f * m.springs_per_iface + q] = kIntact;  // (a pre-cracked joint is glued too)
   }
   return dt;
 }

@@ -176,6 +176,10 @@ expect set_before_case 0 stdout "" -- "$BIN" check --set material.0.density=3000
   --set simulation.end_time=2e-4 -- "check       OK"
 expect run:set_negative 2 stderr good_2d.toml -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_neg" -q \
   --set material.0.density=-5 -- "key 'material[0].density'" "expected a positive number" "got -5"
+expect circle_segments_range 2 stderr bar.toml -- "$BIN" check "$ROOT/examples/single_hole_2d/bar.toml" \
+  --set mesh.generate.circle_segments=-3 -- "key 'mesh.generate.circle_segments'" "from 0 to 1000" "got -3"
+expect hole_cavity_not_bool 2 stderr bar.toml -- "$BIN" check "$ROOT/examples/single_hole_2d/bar.toml" \
+  --set hole.0.cavity=3 -- "key 'hole[0].cavity'" "expected true or false"
 expect missing_case_file 2 stderr no_such_case.toml -- "$BIN" check "$D/no_such_case.toml" -- "no such file"
 expect case_is_directory 2 stderr bad_input -- "$BIN" check "$D" -- "directory"
 expect run:threads_negative 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_thr" -q --threads -1 -- "--threads" "-1"

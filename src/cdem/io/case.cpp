@@ -98,7 +98,7 @@ Sym6 sym6(const TomlTable& t, const std::string& key) {
 
 GenerateSpec parse_generate(const TomlTable& g) {
   g.check_known({"shape", "origin", "size", "element_size", "quads", "hole", "refine", "ring_width",
-                 "ring_element_size", "region"});
+                 "ring_element_size", "region", "circle_segments"});
   GenerateSpec s;
   s.shape = g.choice("shape", {"rectangle", "box", "cylinder"}, "");
   s.origin = g.vec("origin", {});
@@ -114,6 +114,14 @@ GenerateSpec parse_generate(const TomlTable& g) {
   }
   s.element_size = g.positive("element_size");
   s.quads = g.boolean("quads", false);
+  {
+    const auto n = g.integer("circle_segments", 16);
+    if (n < 0 || n > 1000)
+      throw InputError(fmt::format("{}: expected an integer from 0 to 1000 (elements per full turn "
+                                   "of a curved wall; 0: no curvature sizing), got {}",
+                                   g.where("circle_segments"), n));
+    s.circle_segments = static_cast<int>(n);
+  }
   s.region = g.string("region", "rock");
   s.ring_width = g.non_negative("ring_width", 0.0);
   s.ring_element_size = g.positive("ring_element_size", s.element_size);
@@ -482,9 +490,10 @@ std::string resolved_case_toml(const Case& c) {
   } else {
     const auto& g = *c.generate;
     o += fmt::format("[mesh.generate]\nshape = {}\norigin = {}\nsize = {}\nelement_size = {:.17g}\n"
-                     "quads = {}\nregion = {}\nring_width = {:.17g}\nring_element_size = {:.17g}\n",
+                     "quads = {}\nregion = {}\nring_width = {:.17g}\nring_element_size = {:.17g}\n"
+                     "circle_segments = {}\n",
                      q(g.shape), vec_str(g.origin), vec_str(g.size), g.element_size, g.quads,
-                     q(g.region), g.ring_width, g.ring_element_size);
+                     q(g.region), g.ring_width, g.ring_element_size, g.circle_segments);
     for (const auto& h : g.holes)
       o += fmt::format("[[mesh.generate.hole]]\ncenter = {}\nradius = {:.17g}\naxis = {}\n"
                        "depth = {:.17g}\nregion = {}\n",

@@ -26,12 +26,12 @@ namespace {
 int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   const cdem::Case c = cdem::load_case(path, sets);
   const cdem::Mesh mesh = cdem::load_mesh(c);
-  cdem::Simulation sim(cdem::build_case_model(c, mesh), c);
+  const cdem::PreparedCase pc = cdem::prepare_case(c, mesh);
+  const cdem::Simulation& sim = pc.sim;
   const auto& m = sim.model();
   cdem::locate_monitors(m, c);
-  const cdem::BarCharges bars = cdem::build_bar_charges(m, c);
-  const cdem::SolidCharges solids = cdem::build_solid_charges(m, c);
-  if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
+  const cdem::BarCharges& bars = pc.bars;
+  const cdem::SolidCharges& solids = pc.solids;
   const auto& st = sim.stable();
   fmt::print("case        {} ({})\n", c.title, path);
   fmt::print("dimension   {}D\n", m.dim);
@@ -49,7 +49,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   for (const auto& b : bars.bars)
     fmt::print("bar         hole '{}' deck {}: {:.4g} m, {} segments of {:.4g} m, starts at t = {:.4g} s\n",
                b.hole, b.deck + 1, b.length, b.seg_end - b.seg_begin, b.h, b.t0);
-  if (!bars.empty()) fmt::print("bar blocks  {} loaded\n", bars.elem_block.size());
+  if (!bars.empty()) fmt::print("bar blocks  {}\n", cdem::describe_bar_binding(bars));
   for (const auto& ch : solids.charges)
     fmt::print("solid       hole '{}' deck {}\n", ch.hole, ch.deck + 1);
   if (!solids.empty()) fmt::print("explosive   {} blocks\n", solids.block.size());

@@ -195,6 +195,14 @@ TEST(SolidCharge, InvertedBlockIsReportedAndCarriesNoPressure) {
     EXPECT_EQ(sc.p[3], 0.0);
     for (int k = 0; k < 6; ++k) EXPECT_EQ(m.stress[b][k], 0.0);
     for (auto n : out.node) EXPECT_NE(m.node_block[n], b) << "force on the dead block";
+    // It is let go: every spring point at its nodes is released (no force, no contact).
+    for (auto n = n0; n < m.block_first_node[b + 1]; ++n)
+      for (auto q = m.node_sp_offset[n]; q < m.node_sp_offset[n + 1]; ++q) {
+        const auto e = m.node_sp_list[q];
+        const auto sp = static_cast<std::size_t>((e > 0 ? e : -e) - 1);
+        EXPECT_EQ(m.sp_state[sp], kReleased) << "spring point " << sp;
+        EXPECT_EQ(m.sp_fn[sp], 0.0);
+      }
     for (std::size_t i = 0; i < sc.block.size(); ++i) {
       if (i != 3) {
         EXPECT_NEAR(sc.p[i], kP0, 1e-12 * kP0) << "block " << i;

@@ -75,6 +75,10 @@ BarCharges build_bar_charges(const Model& m, const Case& c);
 // added to their P-wave modulus (s; infinity if there are none).
 double make_charge_cavities(Model& m, BarCharges& bars);
 
+// One line for logs and `cdemblast check`: bars, segments, loaded blocks, the range of their
+// charge fractions and attenuation factors.
+std::string describe_bar_binding(const BarCharges& bars);
+
 // Loads the rock at time t (adds to m.f through `out`).
 void bar_loads(Model& m, BarCharges& bars, AppliedLoads& out, double t);
 

@@ -83,27 +83,39 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
 
 }  // namespace
 
+PreparedCase prepare_case(const Case& c, const Mesh& mesh) {
+  // Bars are bound before the simulation is set up: the blocks holding a charge change
+  // material (time step, masses).
+  Model model = build_case_model(c, mesh);
+  BarCharges bars = build_bar_charges(model, c);
+  const double bar_dt = make_charge_cavities(model, bars);
+  SolidCharges solids = build_solid_charges(model, c);
+  Simulation sim(std::move(model), c);
+  if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
+  if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
+  return {std::move(sim), std::move(bars), std::move(solids)};
+}
+
+void add_charge_loads(PreparedCase& pc) {
+  if (!pc.bars.empty())
+    pc.sim.add_load([&b = pc.bars](Model& mm, AppliedLoads& out, double t) { bar_loads(mm, b, out, t); });
+  if (!pc.solids.empty())
+    pc.sim.add_load([&s = pc.solids](Model& mm, AppliedLoads& out, double t) { solid_loads(mm, s, out, t); });
+}
+
 RunResult run_case(const Case& c, const RunOptions& opt) {
   const auto wall0 = Clock::now();
   const int threads = opt.threads > 0 ? opt.threads : (c.threads > 0 ? c.threads : omp_get_num_procs());
   omp_set_num_threads(threads);
 
   Mesh mesh = load_mesh(c);
-  // Explosive loads: bars (SPEC 2) and solid charges (SPEC 3). Bars are bound before the
-  // simulation is set up: the blocks holding a charge change material (time step, masses).
-  Model model = build_case_model(c, mesh);
-  BarCharges bars = build_bar_charges(model, c);
-  const double bar_dt = make_charge_cavities(model, bars);
-  Simulation sim(std::move(model), c);
+  PreparedCase pc = prepare_case(c, mesh);
+  add_charge_loads(pc);
+  Simulation& sim = pc.sim;
   const Model& m = sim.model();
   const auto monitors = locate_monitors(m, c);
-  if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
-  SolidCharges solids = build_solid_charges(m, c);
-  if (!bars.empty()) sim.add_load([&bars](Model& mm, AppliedLoads& out, double t) { bar_loads(mm, bars, out, t); });
-  if (!solids.empty()) {
-    sim.add_load([&solids](Model& mm, AppliedLoads& out, double t) { solid_loads(mm, solids, out, t); });
-    sim.limit_dt(solids.dt_limit, "explosive blocks");
-  }
+  BarCharges& bars = pc.bars;
+  SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
   if (!opt.quiet)
     spdlog::info("{}: {} blocks, {} nodes, {} spring points; dt = {:.4g} s limited by the {} "
@@ -118,19 +130,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     if (!charges_csv) throw std::runtime_error("cannot write charges.csv in " + opt.out_dir);
     write_charge_header(charges_csv);
   }
-  if (!opt.quiet && !bars.empty()) {
-    double phi_lo = 1e300, phi_hi = 0, att_lo = 1e300, att_hi = 0;
-    for (std::size_t i = 0; i < bars.elem_block.size(); ++i) {
-      phi_lo = std::min(phi_lo, bars.elem_phi[i]);
-      phi_hi = std::max(phi_hi, bars.elem_phi[i]);
-      att_lo = std::min(att_lo, bars.elem_atten[i]);
-      att_hi = std::max(att_hi, bars.elem_atten[i]);
-    }
-    spdlog::info("bar charges: {} bars, {} segments, {} loaded blocks; charge volume / block "
-                 "volume {:.3g} to {:.3g}, attenuation {:.3g} to {:.3g}",
-                 bars.bars.size(), bars.n_segments(), bars.elem_block.size(), phi_lo, phi_hi,
-                 att_lo, att_hi);
-  }
+  if (!opt.quiet && !bars.empty()) spdlog::info("bar charges: {}", describe_bar_binding(bars));
+
   if (!opt.quiet && !solids.empty())
     spdlog::info("solid charges: {} decks, {} explosive blocks", solids.charges.size(), solids.block.size());
   // Field output times: t = 0, every output_interval, the listed times, the end.

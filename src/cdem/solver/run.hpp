@@ -6,7 +6,9 @@
 
 #include "cdem/io/case.hpp"
 #include "cdem/mesh/mesh.hpp"
+#include "cdem/explosive/charges.hpp"
 #include "cdem/model/model.hpp"
+#include "cdem/solver/simulation.hpp"
 
 namespace cdem {
 
@@ -28,6 +30,19 @@ Mesh load_mesh(const Case& c);
 
 // Mesh + materials -> Model (the CDEM topology), with the case's names in errors.
 Model build_case_model(const Case& c, const Mesh& mesh);
+
+// A case ready to step: the model built, the charges bound (the blocks holding bar charges
+// changed by make_charge_cavities), the simulation set up with its time step limited by the
+// charges. `cdemblast run` and `cdemblast check` share it, so both report the same dt. The
+// charges' load hooks are not added yet (they capture the charges' addresses): add them where
+// the PreparedCase lives (add_charge_loads).
+struct PreparedCase {
+  Simulation sim;
+  BarCharges bars;
+  SolidCharges solids;
+};
+PreparedCase prepare_case(const Case& c, const Mesh& mesh);
+void add_charge_loads(PreparedCase& pc);
 
 RunResult run_case(const Case& c, const RunOptions& opt);
 

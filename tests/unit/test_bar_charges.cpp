@@ -602,34 +602,44 @@ TEST(BarCharge, VolumeSharedAmongBoundTets) {
   }
 }
 
-// Blocks that are all charge (phi >= 1) are glued to their neighbours like explosive blocks:
-// every interface of theirs gets the unbreakable elastic "charge_contact" law, and only those.
-TEST(BarCharge, ChargeFilledBlocksGetUnbreakableInterfaces) {
-  Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
-  const Model ref = m;
-  // d = 0.15 in 0.1 m cells: phi = 1.5 in the bar's column (the bar loads only that column).
-  BarCharges bc = build_bar_charges(m, bar_case({bar("full", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.15)}));
-  make_charge_cavities(m, bc);
-  std::set<std::int32_t> full;
-  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
-    EXPECT_NEAR(bc.elem_phi[i], 1.5, 1e-6);
-    EXPECT_EQ(m.mat_shear[m.block_material[bc.elem_block[i]]], 0.0);
-    full.insert(bc.elem_block[i]);
-  }
-  ASSERT_EQ(full.size(), 6u);
-  std::size_t glued = 0;
-  for (std::size_t f = 0; f < m.n_ifaces(); ++f) {
-    const bool touches = full.count(m.iface_block_a[f]) || full.count(m.iface_block_b[f]);
-    const auto& im = m.iface_materials[m.iface_material[f]];
-    if (touches) {
-      ++glued;
-      EXPECT_EQ(im.name, "charge_contact");
-      EXPECT_EQ(m.spring_laws[m.iface_material[f]].law, InterfaceLaw::Elastic);
-    } else {
-      EXPECT_EQ(m.iface_material[f], ref.iface_material[f]);
+// Blocks that are mostly charge (phi >= 0.5) are glued to their neighbours like explosive
+// blocks: every interface of theirs gets the unbreakable elastic "charge_contact" law, and only
+// those; they count as charge (no rock volume) in fragments, grading and funnel. Blocks that
+// are mostly rock keep their interfaces and a rock volume fraction 1 - phi.
+TEST(BarCharge, MostlyChargeBlocksGlued) {
+  struct Variant {
+    double d, phi;
+    bool glued;
+  };
+  for (const auto& v : std::vector<Variant>{{0.15, 1.5, true}, {0.055, 0.55, true}, {0.045, 0.45, false}}) {
+    Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
+    const Model ref = m;
+    BarCharges bc = build_bar_charges(m, bar_case({bar("c", {0.25, 0.0, 0}, {0.25, 0.6, 0}, v.d)}));
+    make_charge_cavities(m, bc);
+    std::set<std::int32_t> bound;
+    for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+      const auto& mat = m.block_materials[m.block_material[bc.elem_block[i]]];
+      EXPECT_NEAR(bc.elem_phi[i], v.phi, 1e-6);
+      EXPECT_EQ(mat.charge_block, v.glued) << "d = " << v.d;
+      EXPECT_NEAR(mat.rock_fraction(), v.glued ? 0.0 : 1.0 - v.phi, 1e-6);
+      EXPECT_NEAR(mat.youngs, ref.block_materials[0].youngs * (1 - std::min(1.0, v.phi)),
+                  1e-6 * ref.block_materials[0].youngs);
+      bound.insert(bc.elem_block[i]);
     }
+    ASSERT_EQ(bound.size(), 6u);
+    std::size_t glued = 0;
+    for (std::size_t f = 0; f < m.n_ifaces(); ++f) {
+      const bool touches = bound.count(m.iface_block_a[f]) || bound.count(m.iface_block_b[f]);
+      if (touches && v.glued) {
+        ++glued;
+        EXPECT_EQ(m.iface_materials[m.iface_material[f]].name, "charge_contact");
+        EXPECT_EQ(m.spring_laws[m.iface_material[f]].law, InterfaceLaw::Elastic);
+      } else {
+        EXPECT_EQ(m.iface_material[f], ref.iface_material[f]);
+      }
+    }
+    EXPECT_EQ(glued, v.glued ? 5u + 2u * 6u : 0u);  // 5 between the column's cells, 6 each side
   }
-  EXPECT_EQ(glued, 5u + 2u * 6u);  // 5 between the column's cells, 6 on each side
 }
 
 // make_charge_cavities: a bound block's Lame constants are scaled by its rock fraction 1 - phi,

@@ -12,8 +12,7 @@ FragmentResult model_fragments(const Model& m) {
   std::vector<double> vol(nb);
   std::vector<Vec3> lo(nb), hi(nb), cen(nb), vel(nb);
   for (std::size_t b = 0; b < nb; ++b) {
-    const bool rock = m.block_materials[m.block_material[b]].explosive.empty();
-    vol[b] = rock ? m.block_volume0[b] * m.vol_ratio[b] : 0.0;
+    vol[b] = m.block_materials[m.block_material[b]].rock_fraction() * m.block_volume0[b] * m.vol_ratio[b];
     if (!(vol[b] >= 0)) vol[b] = 0.0;  // an inverted block carries no volume
     const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
     lo[b] = hi[b] = m.x[n0];
@@ -68,7 +67,7 @@ BlastQuality blast_quality(const Model& m, const Case& c) {
     Vec3 s{};
     for (auto n = n0; n < n1; ++n) s += m.X[n];
     cen0[b] = s / (n1 - n0);
-    vol0[b] = m.block_materials[m.block_material[b]].explosive.empty() ? m.block_volume0[b] : 0.0;
+    vol0[b] = m.block_materials[m.block_material[b]].rock_fraction() * m.block_volume0[b];
   }
   std::vector<double> damage;
   std::vector<std::int32_t> mode;

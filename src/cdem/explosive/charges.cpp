@@ -246,6 +246,15 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     bc.elem_phi[i] = phi;
     const double r_over_lc = m.dim == 3 ? std::sqrt(phi) : phi;
     const auto& bar = bc.bars[bc.seg_bar[elem_segs[i].front()]];
+    for (auto sj : elem_segs[i]) {
+      const auto& other = bc.bars[bc.seg_bar[sj]];
+      if (other.attenuation != bar.attenuation)
+        throw InputError(fmt::format("{}: block {} (element {}) holds the charges of holes '{}' and "
+                                     "'{}' with different attenuation exponents ({} and {}); give "
+                                     "them the same",
+                                     c.path, b, m.block_elem_tag[b], bar.hole, other.hole,
+                                     bar.attenuation, other.attenuation));
+    }
     bc.elem_atten[i] = std::min(1.0, std::pow(r_over_lc, bar.attenuation));
   }
   bc.elem_seg_offset.assign(1, 0);
@@ -300,22 +309,46 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
 
 double make_charge_cavities(Model& m, BarCharges& bc) {
   double dt = std::numeric_limits<double>::infinity();
-  std::vector<std::uint8_t> full(m.n_blocks(), 0);  // blocks that are all charge (phi >= 1)
+  std::vector<std::uint8_t> glue(m.n_blocks(), 0);  // blocks that count as charge (phi >= 0.5)
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     const auto b = bc.elem_block[i];
-    const auto& bar = bc.bars[bc.seg_bar[bc.elem_seg[bc.elem_seg_offset[i]]]];
+    // The bars bound to this block: one explosive and one `cavity` setting per block (a block
+    // shared by two bars takes the density and the stiffest products of the two).
+    double rho_w = 0, keos = 0, wsum = 0;
+    bool cavity = false, first = true;
+    for (auto q = bc.elem_seg_offset[i]; q < bc.elem_seg_offset[i + 1]; ++q) {
+      const auto& bar = bc.bars[bc.seg_bar[bc.elem_seg[q]]];
+      if (!first && bar.cavity != cavity)
+        throw InputError(fmt::format("hole '{}': block {} (element {}) holds the charges of holes "
+                                     "with different 'cavity' settings; give them the same",
+                                     bar.hole, b, m.block_elem_tag[b]));
+      cavity = bar.cavity;
+      first = false;
+      const auto& eos = bc.eos[bar.eos];
+      rho_w += explosive_density(eos);
+      wsum += 1.0;
+      // The products stiffen the block: K_eos = -dP/dv at v = 1 (tangent of the isentrope,
+      // by a central difference).
+      const double dv = 1e-4;
+      keos = std::max(keos, (eos_pressure(eos, 1.0 - dv) - eos_pressure(eos, 1.0 + dv)) / (2.0 * dv));
+    }
+    rho_w /= wsum;
     const auto k = m.block_material[b];
     const double lam = m.mat_lambda[k], G = m.mat_shear[k];
     const double rho = m.block_materials[k].density;
     double lam_c = lam, G_c = G, rho_c = rho;
-    if (bar.cavity) {
+    if (cavity) {
       const double phi = std::min(1.0, bc.elem_phi[i]);
       lam_c = (1.0 - phi) * lam;
       G_c = (1.0 - phi) * G;
-      rho_c = (1.0 - phi) * rho + phi * explosive_density(bc.eos[bar.eos]);
+      rho_c = (1.0 - phi) * rho + phi * rho_w;
       BlockMaterial mat = m.block_materials[k];
-      mat.name = fmt::format("{} + charge '{}' (phi {:.3g})", mat.name, bar.hole, phi);
+      mat.name = fmt::format("{} + bar charge (phi {:.3g})", mat.name, phi);
       mat.density = rho_c;
+      mat.youngs *= 1.0 - phi;  // nu kept: lambda and G scale alike, cp() and cs() agree
+      mat.charge_fraction = phi;
+      mat.charge_block = bc.elem_phi[i] >= 0.5;
+      if (mat.charge_block) glue[b] = 1;
       m.block_materials.push_back(mat);
       m.mat_lambda.push_back(lam_c);
       m.mat_shear.push_back(G_c);
@@ -326,23 +359,19 @@ double make_charge_cavities(Model& m, BarCharges& bc) {
       }
       bc.elem_cavity[i] = 1;
     }
-    if (bar.cavity && bc.elem_phi[i] >= 1.0) full[b] = 1;
-    // The products stiffen the block: K_eos = -dP/dv at v = 1 (tangent of the isentrope, by a
-    // central difference), attenuated like the pressure. The P-wave modulus of the block is
-    // then lambda' + 2G + att K_eos.
-    const auto& eos = bc.eos[bar.eos];
-    const double dv = 1e-4;
-    const double keos = (eos_pressure(eos, 1.0 - dv) - eos_pressure(eos, 1.0 + dv)) / (2.0 * dv);
+    // P-wave modulus of the block with the products' tangent stiffness, attenuated like the
+    // pressure: lambda' + 2G' + att K_eos.
     const double c = std::sqrt((lam_c + 2.0 * G_c + bc.elem_atten[i] * keos) / rho_c);
     dt = std::min(dt, m.block_altitude0[b] / c);
   }
-  // A block that is all charge holds no rock: like the solid model's explosive blocks (SPEC 3)
-  // it is joined to its neighbours by unbreakable interfaces (the hole wall confines the
-  // products; without it a stiffness-free block whose interfaces break has free nodes that the
-  // pressure throws apart). Blocks that are partly rock keep the rock's interfaces.
+  // A block that is mostly charge (phi >= 0.5) is held together by the charge, not the rock:
+  // like the solid model's explosive blocks (SPEC 3) it is joined to its neighbours by
+  // unbreakable interfaces (the hole wall confines the products; without it a nearly
+  // stiffness-free block whose interfaces break has free nodes that the pressure throws
+  // apart). Blocks that are mostly rock keep the rock's interfaces and can crack.
   std::int32_t contact = -1;
   for (std::size_t f = 0; f < m.n_ifaces(); ++f) {
-    if (!full[m.iface_block_a[f]] && !full[m.iface_block_b[f]]) continue;
+    if (!glue[m.iface_block_a[f]] && !glue[m.iface_block_b[f]]) continue;
     if (contact < 0) {
       InterfaceMaterial im;
       im.name = "charge_contact";

@@ -16,6 +16,15 @@ struct BlockMaterial {
   double damping = 0;        // mass-proportional viscous damping mu_d / m (1/s), eq. (3)
   double local_damping = 0;  // non-viscous local damping alpha_L (-), 0..1
   std::string explosive;     // non-empty: the region is a solid charge of this explosive
+  // Bar charges (make_charge_cavities): the share of the block that is charge, min(1, phi),
+  // and whether the block counts as charge (phi >= 0.5: glued to its neighbours, left out of
+  // fragments, grading and funnel like a solid charge's blocks).
+  double charge_fraction = 0;
+  bool charge_block = false;
+  // The rock volume fraction of a block of this material (0 for explosive / charge blocks).
+  double rock_fraction() const {
+    return (!explosive.empty() || charge_block) ? 0.0 : 1.0 - charge_fraction;
+  }
   std::vector<std::string> regions;
 
   double shear() const { return youngs / (2.0 * (1.0 + poisson)); }

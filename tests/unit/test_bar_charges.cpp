@@ -581,6 +581,20 @@ TEST(BarAttenuation, FactorAndCap) {
   }
 }
 
+// attenuation_length = "element_size" (SPEC 2 read literally): L_c is the block's size (0.1 m
+// cells: L_c = 0.1), so a 0.02 m charge is attenuated by (0.01 / 0.1)^1.25, not (0.2)^1.25.
+TEST(BarAttenuation, ElementSizeOption) {
+  Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
+  HoleDef h = bar("lit", {0.05, 0.0, 0}, {0.05, 0.6, 0}, 0.02);
+  h.lc_element_size = true;
+  BarCharges bc = build_bar_charges(m, bar_case({h}));
+  ASSERT_EQ(bc.elem_block.size(), 6u);
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+    EXPECT_NEAR(bc.elem_atten[i], std::pow(0.1, 1.25), kRound);
+    EXPECT_NEAR(bc.elem_phi[i], 0.2, 1e-6);  // the charge share is the same either way
+  }
+}
+
 // The charge volume is shared out, never lost or counted twice: the bound tets' charge
 // volumes sum to pi r0^2 L, for a bar through the tets' interiors and for one along an edge
 // shared by several tets. In 3D r0 / L_c = sqrt(phi).

@@ -108,6 +108,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       bar.length = deck.length;
       bar.attenuation = hole.attenuation_exponent;
       bar.cavity = hole.cavity;
+      bar.lc_element_size = hole.lc_element_size;
       bar.start = deck.initiation();
       const Vec3 other = deck.initiate_top ? deck.bottom : deck.top;
       bar.dir = normalized(other - bar.start);
@@ -248,14 +249,15 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     const auto& bar = bc.bars[bc.seg_bar[elem_segs[i].front()]];
     for (auto sj : elem_segs[i]) {
       const auto& other = bc.bars[bc.seg_bar[sj]];
-      if (other.attenuation != bar.attenuation)
+      if (other.attenuation != bar.attenuation || other.lc_element_size != bar.lc_element_size)
         throw InputError(fmt::format("{}: block {} (element {}) holds the charges of holes '{}' and "
-                                     "'{}' with different attenuation exponents ({} and {}); give "
-                                     "them the same",
+                                     "'{}' with different attenuation settings (exponents {} and {}, "
+                                     "or attenuation_length); give them the same",
                                      c.path, b, m.block_elem_tag[b], bar.hole, other.hole,
                                      bar.attenuation, other.attenuation));
     }
-    bc.elem_atten[i] = std::min(1.0, std::pow(r_over_lc, bar.attenuation));
+    const double rl = bar.lc_element_size ? bar.r0 / m.block_size[b] : r_over_lc;
+    bc.elem_atten[i] = std::min(1.0, std::pow(rl, bar.attenuation));
   }
   bc.elem_seg_offset.assign(1, 0);
   for (const auto& v : elem_segs) {

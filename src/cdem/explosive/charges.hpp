@@ -38,6 +38,7 @@ struct BarCharges {
     std::int32_t eos = 0;        // index into eos
     double r0 = 0, D = 0, t0 = 0, length = 0, h = 0, attenuation = 1.25;
     bool cavity = true;          // the charge's share of a bound element is not rock (see below)
+    bool lc_element_size = false;  // attenuation with L_c = element size (SPEC literal)
     Vec3 start, dir;             // initiation point and unit direction along the bar
     std::int32_t seg_begin = 0, seg_end = 0;
   };

@@ -189,7 +189,7 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 
   for (const auto& t : top.array_of_tables("hole")) {
     t.check_known({"name", "collar", "end", "direction", "depth", "diameter", "model",
-                   "attenuation_exponent", "cavity", "charge"});
+                   "attenuation_exponent", "attenuation_length", "cavity", "charge"});
     HoleDef h;
     h.name = t.string("name");
     h.collar = t.vec("collar");
@@ -210,6 +210,9 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
     h.model = t.choice("model", {"bar", "solid"}, "bar") == "bar" ? ChargeModel::Bar : ChargeModel::Solid;
     h.attenuation_exponent = t.non_negative("attenuation_exponent", 1.25);
     h.cavity = t.boolean("cavity", true);
+    h.lc_element_size =
+        t.choice("attenuation_length", {"equivalent_radius", "element_size"}, "equivalent_radius") ==
+        "element_size";
     const Vec3 up = normalized(h.collar - h.end);
     double s = 0;  // distance from the bottom
     for (const auto& q : t.array_of_tables("charge")) {
@@ -558,10 +561,10 @@ std::string resolved_case_toml(const Case& c) {
   }
   for (const auto& h : c.holes) {
     o += fmt::format("\n[[hole]]\nname = {}\ncollar = {}\nend = {}\ndiameter = {:.17g}\nmodel = {}\n"
-                     "attenuation_exponent = {:.17g}\ncavity = {}\n",
+                     "attenuation_exponent = {:.17g}\nattenuation_length = {}\ncavity = {}\n",
                      q(h.name), vec_str(h.collar), vec_str(h.end), h.diameter,
                      q(h.model == ChargeModel::Bar ? "bar" : "solid"), h.attenuation_exponent,
-                     h.cavity);
+                     q(h.lc_element_size ? "element_size" : "equivalent_radius"), h.cavity);
     // Charges from the bottom up, stemming between them.
     std::vector<std::pair<double, std::string>> items;
     const Vec3 up = normalized(h.collar - h.end);

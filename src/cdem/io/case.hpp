@@ -83,6 +83,8 @@ struct HoleDef {
   ChargeModel model = ChargeModel::Bar;
   double attenuation_exponent = 1.25;  // a in (r0 / L_c)^a (bar model)
   bool cavity = true;       // bar model: the charge's share of a bound element is not rock
+  bool lc_element_size = false;  // bar model: L_c in (r0/L_c)^a is the element size (SPEC read
+                                 // literally), not its equivalent radius about the bar
   std::vector<Deck> decks;
   std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
   double length() const { return norm(collar - end); }

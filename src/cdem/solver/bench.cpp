@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cdem/core/polar.hpp"
+#include "cdem/physics/polar_tet.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/explosive/explosive_library.hpp"
 #include "cdem/mesh/element_geometry.hpp"
@@ -222,7 +223,7 @@ double mean_polar_iterations(const Model& m) {
       }
       for (int q = 0; q < 9; ++q) dminv.m[q] = gm[q];
       Mat3 R;
-      const int it = polar_3d(ds * dminv, R);
+      const int it = polar_3d_tet(ds * dminv, R);
       if (it < 0) continue;
       sum += it;
       ++count;

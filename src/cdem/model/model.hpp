@@ -40,8 +40,9 @@ struct Model {
   std::vector<Vec3> f;         // force accumulated in the current step (N)
   std::vector<double> mass;    // lumped mass (kg)
   std::vector<double> inv_mass;
-  std::vector<double> damping;        // mass-proportional damping coefficient (1/s)
-  std::vector<double> local_damping;  // alpha_L
+  std::vector<double> damping;        // mass-proportional damping coefficient (1/s); empty: 0
+                                      // everywhere (see release_zero_damping, integrate.hpp)
+  std::vector<double> local_damping;  // alpha_L; empty: 0 everywhere
   std::vector<std::int32_t> node_block;
   std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
 

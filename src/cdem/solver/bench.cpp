@@ -293,9 +293,12 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
   // record (node, force, old velocity) per node.
   s.loads = static_cast<double>(loaded_blocks) * 4.0 *
             (3 * sizeof(Vec3) + sizeof(std::int32_t) + 2 * sizeof(Vec3) + sizeof(Vec3));
-  // integrate: read mass, f, v, local damping, damping, dissipated; write v, dissipated.
+  // integrate: read mass, f, v, local damping, damping, dissipated; write v, dissipated (the
+  // damping arrays and the dissipation only when the model has damping: see integrate.hpp).
+  const bool damped = !m.damping.empty() || !m.local_damping.empty();
   s.integrate = size_of(m.mass) + size_of(m.f) + 2 * size_of(m.v) + size_of(m.local_damping) +
-                size_of(m.damping) + 2.0 * static_cast<double>(m.n_nodes() * sizeof(double));
+                size_of(m.damping) +
+                (damped ? 2.0 * static_cast<double>(m.n_nodes() * sizeof(double)) : 0.0);
   return s;
 }
 

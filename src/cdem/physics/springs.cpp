@@ -8,6 +8,12 @@
 namespace cdem {
 namespace {
 
+// a / |a| with one division (normalized() divides each component), 0 for a = 0.
+inline Vec3 unit(Vec3 a) {
+  const double n2 = dot(a, a);
+  return n2 > 0 ? (1.0 / std::sqrt(n2)) * a : Vec3{};
+}
+
 inline double elastic_energy(const SpringPoint& sp) {
   return 0.5 * sp.fn * sp.fn / sp.kn + 0.5 * dot(sp.fs, sp.fs) / sp.ks;
 }
@@ -131,10 +137,10 @@ void spring_forces(Model& m, double dt, double t) {
       qa[q] = pa[q] - dt * m.v[a];
       qb[q] = pb[q] - dt * m.v[b];
     }
-    const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(pa, np), np) +
-                              face_area_vector(std::span<const Vec3>(pb, np), np));
-    const Vec3 n_old = normalized(face_area_vector(std::span<const Vec3>(qa, np), np) +
-                                  face_area_vector(std::span<const Vec3>(qb, np), np));
+    const Vec3 n = unit(face_area_vector(std::span<const Vec3>(pa, np), np) +
+                        face_area_vector(std::span<const Vec3>(pb, np), np));
+    const Vec3 n_old = unit(face_area_vector(std::span<const Vec3>(qa, np), np) +
+                            face_area_vector(std::span<const Vec3>(qb, np), np));
     // The interface's spin over the step. A change of more than 0.1 rad in one step is not a
     // rotation but a degenerate or flipping face (an inverted block): no correction then.
     Vec3 dn_vec = n - n_old;
@@ -160,16 +166,19 @@ void spring_forces(Model& m, double dt, double t) {
       // dissipation book-keeping.
       if (state == kIntact && law.law != InterfaceLaw::FractureEnergy) {
         Vec3 fs = m.sp_fs[s];
-        const double fs_old = norm(fs);
+        const double fs_old2 = dot(fs, fs);
         fs -= dot(fs, n) * n;
-        const double fs_proj = norm(fs);
-        if (fs_proj > 0) fs *= fs_old / fs_proj;
+        const double fs_proj2 = dot(fs, fs);
+        // Rescale to the old magnitude: |F_s| / |F_s,proj| as one square root of the ratio.
+        if (fs_proj2 > 0) fs *= std::sqrt(fs_old2 / fs_proj2);
         const double ks = m.sp_ks[s];
         fs += ks * (du - dot(du, n) * n);
         const double fn = m.sp_kn[s] * (dot(d, n) + off);
         const double area = m.sp_area[s];
+        // |F_s| < tau, tested on the squares (tau > 0 first).
+        const double tau = law.c * area - fn * law.tan_phi;
         const bool holds = law.law == InterfaceLaw::Elastic ||
-                           (fn < law.ft * area && norm(fs) < law.c * area - fn * law.tan_phi);
+                           (fn < law.ft * area && tau > 0 && dot(fs, fs) < tau * tau);
         if (holds) {
           m.sp_fn[s] = fn;
           m.sp_fs[s] = fs;

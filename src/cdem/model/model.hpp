@@ -71,6 +71,9 @@ struct Model {
   std::vector<std::int32_t> iface_block_a, iface_block_b;
   std::vector<std::int32_t> iface_material;    // index into spring_laws / iface_materials
   std::vector<double> iface_area0;             // reference face area (m^2; 2D: length x 1 m)
+  std::vector<Vec3> iface_normal;              // unit normal at the last spring_forces call: the
+                                               // previous normal of the next (springs.hpp)
+  bool iface_normal_set = false;               // false: rebuild it from x - v dt
   std::vector<std::int32_t> sp_a, sp_b;        // nodes
   std::vector<double> sp_area;                 // contact area A_c (m^2)
   std::vector<double> sp_kn, sp_ks;            // stiffness x A_c (N/m)

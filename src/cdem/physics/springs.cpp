@@ -126,21 +126,36 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
 void spring_forces(Model& m, double dt, double t) {
   const int np = m.springs_per_iface;
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  if (m.iface_normal.size() != m.n_ifaces()) {
+    m.iface_normal.assign(m.n_ifaces(), Vec3{});
+    m.iface_normal_set = false;
+  }
+  const bool have_old = m.iface_normal_set;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < ni; ++i) {
     const std::int64_t s0 = i * np;
-    Vec3 pa[3], pb[3], qa[3], qb[3];  // current and previous (x - v dt) positions
+    Vec3 pa[3], pb[3];
     for (int q = 0; q < np; ++q) {
-      const auto a = m.sp_a[s0 + q], b = m.sp_b[s0 + q];
-      pa[q] = m.x[a];
-      pb[q] = m.x[b];
-      qa[q] = pa[q] - dt * m.v[a];
-      qb[q] = pb[q] - dt * m.v[b];
+      pa[q] = m.x[m.sp_a[s0 + q]];
+      pb[q] = m.x[m.sp_b[s0 + q]];
     }
     const Vec3 n = unit(face_area_vector(std::span<const Vec3>(pa, np), np) +
                         face_area_vector(std::span<const Vec3>(pb, np), np));
-    const Vec3 n_old = unit(face_area_vector(std::span<const Vec3>(qa, np), np) +
-                            face_area_vector(std::span<const Vec3>(qb, np), np));
+    // The previous normal: kept from the previous call (x then was x - v dt up to rounding);
+    // on the first call rebuilt from the previous positions x - v dt.
+    Vec3 n_old;
+    if (have_old) {
+      n_old = m.iface_normal[i];
+    } else {
+      Vec3 qa[3], qb[3];
+      for (int q = 0; q < np; ++q) {
+        qa[q] = pa[q] - dt * m.v[m.sp_a[s0 + q]];
+        qb[q] = pb[q] - dt * m.v[m.sp_b[s0 + q]];
+      }
+      n_old = unit(face_area_vector(std::span<const Vec3>(qa, np), np) +
+                   face_area_vector(std::span<const Vec3>(qb, np), np));
+    }
+    m.iface_normal[i] = n;
     // The interface's spin over the step. A change of more than 0.1 rad in one step is not a
     // rotation but a degenerate or flipping face (an inverted block): no correction then.
     Vec3 dn_vec = n - n_old;
@@ -203,6 +218,7 @@ void spring_forces(Model& m, double dt, double t) {
       m.sp_dissipated[s] = sp.dissipated;
     }
   }
+  m.iface_normal_set = true;
 }
 
 void gather_spring_forces(Model& m) {

@@ -320,6 +320,8 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   m.sp_break_time.assign(ns, -1.0f);
   m.sp_dissipated.assign(ns, 0.0);
   m.sp_force.assign(ns, Vec3{});
+  m.iface_normal.assign(m.n_ifaces(), Vec3{});
+  m.iface_normal_set = false;
   for (const auto& im : m.iface_materials) m.spring_laws.push_back(make_spring_law(im));
   for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
     const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];

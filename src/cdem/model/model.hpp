@@ -40,8 +40,9 @@ struct Model {
   std::vector<Vec3> f;         // force accumulated in the current step (N)
   std::vector<double> mass;    // lumped mass (kg)
   std::vector<double> inv_mass;
-  std::vector<double> damping;        // mass-proportional damping coefficient (1/s)
-  std::vector<double> local_damping;  // alpha_L
+  std::vector<double> damping;        // mass-proportional damping coefficient (1/s); empty: 0
+                                      // everywhere (see release_zero_damping, integrate.hpp)
+  std::vector<double> local_damping;  // alpha_L; empty: 0 everywhere
   std::vector<std::int32_t> node_block;
   std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
 
@@ -70,6 +71,9 @@ struct Model {
   std::vector<std::int32_t> iface_block_a, iface_block_b;
   std::vector<std::int32_t> iface_material;    // index into spring_laws / iface_materials
   std::vector<double> iface_area0;             // reference face area (m^2; 2D: length x 1 m)
+  std::vector<Vec3> iface_normal;              // unit normal at the last spring_forces call: the
+                                               // previous normal of the next (springs.hpp)
+  bool iface_normal_set = false;               // false: rebuild it from x - v dt
   std::vector<std::int32_t> sp_a, sp_b;        // nodes
   std::vector<double> sp_area;                 // contact area A_c (m^2)
   std::vector<double> sp_kn, sp_ks;            // stiffness x A_c (N/m)

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "cdem/core/polar.hpp"
+#include "cdem/physics/polar_tet.hpp"
 
 namespace cdem {
 namespace {
@@ -156,7 +157,7 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
     for (int q = 0; q < 9; ++q) dminv.m[q] = g[q];
     const Mat3 F = ds * dminv;
     Mat3 R;
-    const int iters = polar_3d(F, R);
+    const int iters = polar_3d_tet(F, R);
     const Mat3 U = transpose(R) * F;
     const Sym6& s0 = m.stress0[b];
     const double exx = U(0, 0) - 1, eyy = U(1, 1) - 1, ezz = U(2, 2) - 1;

@@ -8,6 +8,12 @@
 namespace cdem {
 namespace {
 
+// a / |a| with one division (normalized() divides each component), 0 for a = 0.
+inline Vec3 unit(Vec3 a) {
+  const double n2 = dot(a, a);
+  return n2 > 0 ? (1.0 / std::sqrt(n2)) * a : Vec3{};
+}
+
 inline double elastic_energy(const SpringPoint& sp) {
   return 0.5 * sp.fn * sp.fn / sp.kn + 0.5 * dot(sp.fs, sp.fs) / sp.ks;
 }
@@ -120,21 +126,36 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
 void spring_forces(Model& m, double dt, double t) {
   const int np = m.springs_per_iface;
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  if (m.iface_normal.size() != m.n_ifaces()) {
+    m.iface_normal.assign(m.n_ifaces(), Vec3{});
+    m.iface_normal_set = false;
+  }
+  const bool have_old = m.iface_normal_set;
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < ni; ++i) {
     const std::int64_t s0 = i * np;
-    Vec3 pa[3], pb[3], qa[3], qb[3];  // current and previous (x - v dt) positions
+    Vec3 pa[3], pb[3];
     for (int q = 0; q < np; ++q) {
-      const auto a = m.sp_a[s0 + q], b = m.sp_b[s0 + q];
-      pa[q] = m.x[a];
-      pb[q] = m.x[b];
-      qa[q] = pa[q] - dt * m.v[a];
-      qb[q] = pb[q] - dt * m.v[b];
+      pa[q] = m.x[m.sp_a[s0 + q]];
+      pb[q] = m.x[m.sp_b[s0 + q]];
     }
-    const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(pa, np), np) +
-                              face_area_vector(std::span<const Vec3>(pb, np), np));
-    const Vec3 n_old = normalized(face_area_vector(std::span<const Vec3>(qa, np), np) +
-                                  face_area_vector(std::span<const Vec3>(qb, np), np));
+    const Vec3 n = unit(face_area_vector(std::span<const Vec3>(pa, np), np) +
+                        face_area_vector(std::span<const Vec3>(pb, np), np));
+    // The previous normal: kept from the previous call (x then was x - v dt up to rounding);
+    // on the first call rebuilt from the previous positions x - v dt.
+    Vec3 n_old;
+    if (have_old) {
+      n_old = m.iface_normal[i];
+    } else {
+      Vec3 qa[3], qb[3];
+      for (int q = 0; q < np; ++q) {
+        qa[q] = pa[q] - dt * m.v[m.sp_a[s0 + q]];
+        qb[q] = pb[q] - dt * m.v[m.sp_b[s0 + q]];
+      }
+      n_old = unit(face_area_vector(std::span<const Vec3>(qa, np), np) +
+                   face_area_vector(std::span<const Vec3>(qb, np), np));
+    }
+    m.iface_normal[i] = n;
     // The interface's spin over the step. A change of more than 0.1 rad in one step is not a
     // rotation but a degenerate or flipping face (an inverted block): no correction then.
     Vec3 dn_vec = n - n_old;
@@ -160,16 +181,19 @@ void spring_forces(Model& m, double dt, double t) {
       // dissipation book-keeping.
       if (state == kIntact && law.law != InterfaceLaw::FractureEnergy) {
         Vec3 fs = m.sp_fs[s];
-        const double fs_old = norm(fs);
+        const double fs_old2 = dot(fs, fs);
         fs -= dot(fs, n) * n;
-        const double fs_proj = norm(fs);
-        if (fs_proj > 0) fs *= fs_old / fs_proj;
+        const double fs_proj2 = dot(fs, fs);
+        // Rescale to the old magnitude: |F_s| / |F_s,proj| as one square root of the ratio.
+        if (fs_proj2 > 0) fs *= std::sqrt(fs_old2 / fs_proj2);
         const double ks = m.sp_ks[s];
         fs += ks * (du - dot(du, n) * n);
         const double fn = m.sp_kn[s] * (dot(d, n) + off);
         const double area = m.sp_area[s];
+        // |F_s| < tau, tested on the squares (tau > 0 first).
+        const double tau = law.c * area - fn * law.tan_phi;
         const bool holds = law.law == InterfaceLaw::Elastic ||
-                           (fn < law.ft * area && norm(fs) < law.c * area - fn * law.tan_phi);
+                           (fn < law.ft * area && tau > 0 && dot(fs, fs) < tau * tau);
         if (holds) {
           m.sp_fn[s] = fn;
           m.sp_fs[s] = fs;
@@ -194,6 +218,7 @@ void spring_forces(Model& m, double dt, double t) {
       m.sp_dissipated[s] = sp.dissipated;
     }
   }
+  m.iface_normal_set = true;
 }
 
 void gather_spring_forces(Model& m) {

@@ -6,8 +6,12 @@
 //   shear force    F_s += k_s A_c du_s, du_s the tangential part of the objective relative
 //                  displacement increment (v_b - v_a) dt - d_n (n - n_old): the spin of the
 //                  interface carrying the gap d_n along is removed, so a rigid rotation adds no
-//                  shear (n_old is rebuilt from the previous positions x - v dt); F_s is kept in
-//                  the current tangent plane (rotated with the interface, magnitude preserved).
+//                  shear (n_old is the normal of the previous call, kept per interface in
+//                  Model::iface_normal: the previous positions are x - v dt up to rounding; the
+//                  first call, Model::iface_normal_set false, rebuilds it from x - v dt); F_s is
+//                  kept in the current tangent plane (rotated with the interface, magnitude
+//                  preserved). A caller that moves nodes other than by x += v dt between calls
+//                  clears iface_normal_set.
 // The normal force is written in total form (the relative displacement of the two coincident
 // nodes along the current normal): for intact springs this equals the incremental update of
 // eq. (7) for any rigid motion and does not drift; for broken springs it makes contact

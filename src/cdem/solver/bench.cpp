@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cdem/core/polar.hpp"
+#include "cdem/physics/polar_tet.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/explosive/explosive_library.hpp"
 #include "cdem/mesh/element_geometry.hpp"
@@ -222,7 +223,7 @@ double mean_polar_iterations(const Model& m) {
       }
       for (int q = 0; q < 9; ++q) dminv.m[q] = gm[q];
       Mat3 R;
-      const int it = polar_3d(ds * dminv, R);
+      const int it = polar_3d_tet(ds * dminv, R);
       if (it < 0) continue;
       sum += it;
       ++count;
@@ -243,7 +244,7 @@ std::size_t model_bytes(const Model& m) {
        bytes_of(m.geom) + bytes_of(m.geom_offset) + bytes_of(m.stress) + bytes_of(m.stress0) +
        bytes_of(m.strain_energy) + bytes_of(m.vol_ratio);
   b += bytes_of(m.iface_block_a) + bytes_of(m.iface_block_b) + bytes_of(m.iface_material) +
-       bytes_of(m.iface_area0) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area) +
+       bytes_of(m.iface_area0) + bytes_of(m.iface_normal) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area) +
        bytes_of(m.sp_kn) + bytes_of(m.sp_ks) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
        bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_g0) +
        bytes_of(m.sp_state) + bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) +
@@ -280,6 +281,7 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
               size_of(m.block_size) + size_of(m.sp_a) + size_of(m.sp_b) + size_of(m.x) +
               size_of(m.v) + size_of(m.sp_kn) + size_of(m.sp_ks) + size_of(m.sp_area) +
               size_of(m.sp_g0) + size_of(m.sp_state) + 2 * size_of(m.sp_fs) + size_of(m.sp_fn) +
+              2 * size_of(m.iface_normal) +
               size_of(m.sp_force) +
               slow_fraction *
                   (size_of(m.sp_fn) + size_of(m.sp_force) + size_of(m.sp_state) +
@@ -292,9 +294,12 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
   // record (node, force, old velocity) per node.
   s.loads = static_cast<double>(loaded_blocks) * 4.0 *
             (3 * sizeof(Vec3) + sizeof(std::int32_t) + 2 * sizeof(Vec3) + sizeof(Vec3));
-  // integrate: read mass, f, v, local damping, damping, dissipated; write v, dissipated.
+  // integrate: read mass, f, v, local damping, damping, dissipated; write v, dissipated (the
+  // damping arrays and the dissipation only when the model has damping: see integrate.hpp).
+  const bool damped = !m.damping.empty() || !m.local_damping.empty();
   s.integrate = size_of(m.mass) + size_of(m.f) + 2 * size_of(m.v) + size_of(m.local_damping) +
-                size_of(m.damping) + 2.0 * static_cast<double>(m.n_nodes() * sizeof(double));
+                size_of(m.damping) +
+                (damped ? 2.0 * static_cast<double>(m.n_nodes() * sizeof(double)) : 0.0);
   return s;
 }
 

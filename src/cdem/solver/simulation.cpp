@@ -17,6 +17,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
   bc_ = prepare_boundaries(m_, c);
   setup_damping_zones(c);
+  release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
   for (const auto& f : c.analysis.main_faces)
     if (!m_.facet_set(f))
       throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));
@@ -207,7 +208,7 @@ EnergyBalance Simulation::energy() const {
   // at t_n, so half of the last step's increment is taken back out (exact to O(dt^2) per step,
   // not accumulated). Viscous damping of the last step: c m |v_mid|^2 dt = 2 c ke dt.
   double last_damping = 0;
-  if (steps_ > 0)
+  if (steps_ > 0 && !m_.damping.empty())
     for (std::size_t n = 0; n < m_.n_nodes(); ++n) last_damping += 2.0 * m_.damping[n] * ke_[n] * dt_;
   e.damping += w_absorbed_ - 0.5 * (last_absorbed_ + last_damping);
   e.external_work = w_boundary_ - 0.5 * last_boundary_;

@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "cdem/core/error.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/explosive/eos.hpp"
 #include "cdem/solver/simulation.hpp"
@@ -69,6 +70,36 @@ SolidSetup solid_setup(double delay, bool initiate_top) {
 
 // Ignition times are t_D0 + distance / D exactly: centroids at y = 0.525 + 0.05 k, initiation
 // at y = 0.5 (bottom) or 0.8 (top). Burn time L_c / D = 0.05 / D.
+// Simulation::limit_dt applies the case's safety factor to each bound, however many parts
+// limit the step (a bar and a solid charge in one case call it twice): dt = safety x the
+// smallest bound; a fixed simulation.dt above a bound is an input error naming the key.
+TEST(SolidCharge, LimitDtTwiceKeepsTheSafetyFactor) {
+  auto s = solid_setup(0.0, false);
+  Simulation sim(Model(s.model), s.c);
+  const double safety = sim.stable().safety;
+  ASSERT_GT(safety, 0.0);
+  const double base = sim.dt() / safety;  // the bare stable step
+  sim.limit_dt(0.5 * base, "first");
+  EXPECT_NEAR(sim.dt(), safety * 0.5 * base, 1e-15 * base);
+  sim.limit_dt(0.4 * base, "second");
+  EXPECT_NEAR(sim.dt(), safety * 0.4 * base, 1e-15 * base);
+  EXPECT_EQ(sim.stable().limit, "second");
+  sim.limit_dt(0.45 * base, "third");  // not smaller: no change
+  EXPECT_NEAR(sim.dt(), safety * 0.4 * base, 1e-15 * base);
+  Case fixed = s.c;
+  fixed.fixed_dt = 0.6 * base;
+  Simulation sf(Model(s.model), fixed);
+  EXPECT_NO_THROW(sf.limit_dt(0.7 * base, "ok"));
+  EXPECT_EQ(sf.dt(), 0.6 * base);
+  try {
+    sf.limit_dt(0.5 * base, "explosive blocks");
+    ADD_FAILURE() << "no error for a fixed dt above the bound";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("simulation.dt"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("explosive blocks"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SolidCharge, IgnitionTimesFromCentroidDistance) {
   for (bool top : {false, true}) {
     const auto s = solid_setup(1e-5, top);

@@ -23,6 +23,8 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
       throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));
   setup_initial_stress(c);
   stable_ = stable_time_step(m_, c.dt_safety);
+  fixed_dt_ = c.fixed_dt;
+  case_path_ = c.path;
   dt_ = stable_.dt;
   if (c.fixed_dt > 0) {
     if (c.fixed_dt > stable_.dt / c.dt_safety)
@@ -44,7 +46,14 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
 
 void Simulation::limit_dt(double dt_max, const std::string& what) {
   if (!(dt_max > 0) || !std::isfinite(dt_max)) return;
-  const double safety = stable_.dt / std::min(stable_.dt_block, stable_.dt_spring);
+  if (fixed_dt_ > 0) {
+    if (fixed_dt_ > dt_max)
+      throw InputError(fmt::format("{}: key 'simulation.dt': {} s is above the stable step {:.4g} s "
+                                   "of the {}",
+                                   case_path_, fixed_dt_, dt_max, what));
+    return;
+  }
+  const double safety = stable_.safety;
   if (safety * dt_max < dt_) {
     dt_ = safety * dt_max;
     stable_.dt = dt_;

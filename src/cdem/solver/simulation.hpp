@@ -72,7 +72,8 @@ class Simulation {
   EnergyBalance energy() const;
 
   void add_load(LoadHook hook) { loads_.push_back(std::move(hook)); }
-  // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it.
+  // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it. With a
+  // fixed time step (simulation.dt) above dt_max, throws InputError naming the key.
   void limit_dt(double dt_max, const std::string& what);
 
  private:
@@ -85,6 +86,8 @@ class Simulation {
   std::vector<LoadHook> loads_;
   AppliedLoads applied_;
   double t_ = 0, dt_ = 0;
+  double fixed_dt_ = 0;     // simulation.dt, 0 when the stable step is used
+  std::string case_path_;
   std::int64_t steps_ = 0;
   std::int64_t inverted_ = 0;
   std::int32_t first_inverted_ = -1;

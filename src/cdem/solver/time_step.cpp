@@ -36,6 +36,7 @@ StableStep stable_time_step(const Model& m, double safety) {
   }
   s.limit = s.dt_spring < s.dt_block ? "springs" : "blocks";
   s.dt = safety * std::min(s.dt_block, s.dt_spring);
+  s.safety = safety;
   return s;
 }
 

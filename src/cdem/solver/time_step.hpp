@@ -15,6 +15,7 @@ struct StableStep {
   std::int64_t block = -1;   // the limiting block
   std::int64_t node = -1;    // the limiting node (spring limit)
   double dt = 0;             // safety * min
+  double safety = 0;         // the safety factor applied
   std::string limit;         // "blocks" or "springs"
 };
 

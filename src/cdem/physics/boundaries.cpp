@@ -70,6 +70,18 @@ Boundaries prepare_boundaries(const Model& m, const Case& c) {
   for (auto& lf : b.loads)
     for (int q = 0; q < lf.facet.count(); ++q) lf.slot[q] = slot(lf.facet.nodes[q]);
   b.work_nodes = nodes;
+  b.node_load_offset.assign(nodes.size() + 1, 0);
+  for (const auto& lf : b.loads)
+    for (int q = 0; q < lf.facet.count(); ++q) ++b.node_load_offset[lf.slot[q] + 1];
+  for (std::size_t i = 0; i < nodes.size(); ++i) b.node_load_offset[i + 1] += b.node_load_offset[i];
+  b.node_load_entry.assign(b.node_load_offset.back(), -1);
+  {
+    std::vector<std::int32_t> fill(b.node_load_offset.begin(), b.node_load_offset.end() - 1);
+    for (std::size_t l = 0; l < b.loads.size(); ++l)  // facet order, then q: the serial order
+      for (int q = 0; q < b.loads[l].facet.count(); ++q)
+        b.node_load_entry[fill[b.loads[l].slot[q]]++] = static_cast<std::int32_t>(3 * l + q);
+  }
+  b.load_force.assign(3 * b.loads.size(), Vec3{});
   b.v_old.resize(nodes.size());
   b.f_load.resize(nodes.size());
   b.f_dash.resize(nodes.size());
@@ -77,33 +89,51 @@ Boundaries prepare_boundaries(const Model& m, const Case& c) {
 }
 
 void boundary_forces(Model& m, Boundaries& b, double t) {
-  for (std::size_t i = 0; i < b.work_nodes.size(); ++i) {
-    b.v_old[i] = m.v[b.work_nodes[i]];
-    b.f_load[i] = {};
-    b.f_dash[i] = {};
-  }
-  for (const auto& lf : b.loads) {
-    const int k = lf.facet.count();
-    Vec3 p[3];
-    for (int q = 0; q < k; ++q) p[q] = m.x[lf.facet.nodes[q]];
-    const Vec3 av = face_area_vector(std::span<const Vec3>(p, k), k);  // outward, |av| = area
-    if (lf.kind == 0) {
-      const Vec3 fn = (-lf.a * b.tables[lf.table](t) / k) * av;  // pressure pushes inward
-      for (int q = 0; q < k; ++q) {
-        m.f[lf.facet.nodes[q]] += fn;
-        b.f_load[lf.slot[q]] += fn;
+  const auto nl = static_cast<std::int64_t>(b.loads.size());
+  const auto nw = static_cast<std::int64_t>(b.work_nodes.size());
+  if (nl == 0 && nw == 0) return;
+#pragma omp parallel
+  {
+    // 1. Each facet's force on each of its nodes (reads x and v only).
+#pragma omp for schedule(static)
+    for (std::int64_t l = 0; l < nl; ++l) {
+      const auto& lf = b.loads[l];
+      const int k = lf.facet.count();
+      Vec3 p[3];
+      for (int q = 0; q < k; ++q) p[q] = m.x[lf.facet.nodes[q]];
+      const Vec3 av = face_area_vector(std::span<const Vec3>(p, k), k);  // outward, |av| = area
+      Vec3* out = b.load_force.data() + 3 * l;
+      if (lf.kind == 0) {
+        const Vec3 fn = (-lf.a * b.tables[lf.table](t) / k) * av;  // pressure pushes inward
+        for (int q = 0; q < k; ++q) out[q] = fn;
+      } else {
+        const double area = norm(av);
+        const Vec3 n = av / area;
+        for (int q = 0; q < k; ++q) {
+          const Vec3 v = m.v[lf.facet.nodes[q]];
+          const double vn = dot(v, n);
+          out[q] = (-area / k) * (lf.a * vn * n + lf.b * (v - vn * n));
+        }
       }
-    } else {
-      const double area = norm(av);
-      const Vec3 n = av / area;
-      for (int q = 0; q < k; ++q) {
-        const auto nd = lf.facet.nodes[q];
-        const Vec3 v = m.v[nd];
-        const double vn = dot(v, n);
-        const Vec3 fd = (-area / k) * (lf.a * vn * n + lf.b * (v - vn * n));
-        m.f[nd] += fd;
-        b.f_dash[lf.slot[q]] += fd;
+    }
+    // 2. Per boundary node: v(n-1/2), and its facet forces added to f one by one in the serial
+    // order (facet by facet), so the sums do not depend on the thread count.
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < nw; ++i) {
+      const auto nd = b.work_nodes[i];
+      b.v_old[i] = m.v[nd];
+      Vec3 fl{}, fd{};
+      for (auto e = b.node_load_offset[i]; e < b.node_load_offset[i + 1]; ++e) {
+        const auto entry = b.node_load_entry[e];
+        const Vec3 fe = b.load_force[entry];
+        m.f[nd] += fe;
+        if (b.loads[entry / 3].kind == 0)
+          fl += fe;
+        else
+          fd += fe;
       }
+      b.f_load[i] = fl;
+      b.f_dash[i] = fd;
     }
   }
 }

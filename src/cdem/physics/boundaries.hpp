@@ -1,7 +1,8 @@
 // Boundary conditions (SPEC 1.4) prepared once from the case: velocity constraints (fixed,
 // roller, prescribed velocity) applied after the velocity update, and boundary forces
 // (pressure, Lysmer-Kuhlemeyer viscous dashpots) added before it. Gravity is applied in the
-// integration kernel. Boundary node sets are small (surface), so these loops are serial.
+// integration kernel. The boundary forces run in parallel (per facet, then per node in a fixed
+// order); the constraints and the work sums are small and serial.
 #pragma once
 #include <array>
 #include <string>
@@ -35,6 +36,11 @@ struct Boundaries {
   // step, so that their work uses the mid-step velocity (v_old + v_new) / 2.
   std::vector<std::int32_t> work_nodes;
   std::vector<Vec3> v_old, f_load, f_dash;
+  // Per work node, its load-facet contributions in the serial order (facet by facet, node q of
+  // each): entries load * 3 + q of load_force, node_load_offset being a CSR offset (size
+  // work_nodes + 1). Every node's force is summed in this order whatever the thread count.
+  std::vector<std::int32_t> node_load_offset, node_load_entry;
+  std::vector<Vec3> load_force;  // per load facet and node q, the step's force (3 per facet)
 };
 
 // Throws InputError naming the case file and key for an unknown face set.

@@ -6,6 +6,7 @@
 
 #include "cdem/core/polar.hpp"
 #include "cdem/physics/polar_tet.hpp"
+#include "cdem/physics/springs.hpp"
 
 namespace cdem {
 namespace {
@@ -67,7 +68,7 @@ void note_inverted(std::int64_t& count, std::int32_t b, std::int32_t* first) {
 }  // namespace
 
 std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
-                              std::int32_t* first_inverted) {
+                              std::int32_t* first_inverted, bool gather_springs) {
   std::int64_t inverted = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inverted)
   for (std::int32_t b = begin; b < end; ++b) {
@@ -86,6 +87,7 @@ std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
     for (int i = 0; i < 3; ++i)
       m.f[n0 + i] = {-v0 * (pt.p00 * gx[i] + pt.p01 * gy[i]),
                      -v0 * (pt.p10 * gx[i] + pt.p11 * gy[i]), 0.0};
+    if (gather_springs) add_spring_forces(m, n0, n0 + 3);
     m.stress[b] = pt.sigma;
     m.strain_energy[b] = v0 * pt.w;
     m.vol_ratio[b] = pt.j;
@@ -95,7 +97,7 @@ std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
 }
 
 std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
-                               std::int32_t* first_inverted) {
+                               std::int32_t* first_inverted, bool gather_springs) {
   std::int64_t inverted = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inverted)
   for (std::int32_t b = begin; b < end; ++b) {
@@ -130,6 +132,7 @@ std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
       vol += wq;
     }
     for (int i = 0; i < 4; ++i) m.f[n0 + i] = {fx[i], fy[i], 0.0};
+    if (gather_springs) add_spring_forces(m, n0, n0 + 4);
     for (int c = 0; c < 6; ++c) sig[c] /= vol;
     m.stress[b] = sig;
     m.strain_energy[b] = w;
@@ -140,7 +143,7 @@ std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
 }
 
 std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
-                              std::int32_t* first_inverted) {
+                              std::int32_t* first_inverted, bool gather_springs) {
   std::int64_t inverted = 0;
 #pragma omp parallel for schedule(static) reduction(+ : inverted)
   for (std::int32_t b = begin; b < end; ++b) {
@@ -182,6 +185,7 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
       fsum += fj;
     }
     m.f[n0] = -fsum;
+    if (gather_springs) add_spring_forces(m, n0, n0 + 4);
     const Mat3 sig = P * transpose(R);
     m.stress[b] = {sig(0, 0), sig(1, 1), sig(2, 2), sig(0, 1), sig(1, 2), sig(0, 2)};
     m.strain_energy[b] =
@@ -194,18 +198,23 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
   return inverted;
 }
 
-std::int64_t block_forces(Model& m, std::int32_t* first_inverted) {
+std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs) {
   std::int64_t inverted = 0;
+  const bool gs = gather_springs;
   for (const auto& g : m.groups) {
     if (g.kind != BlockKind::Elastic) {
-      const auto nb = m.block_first_node[g.begin], ne = m.block_first_node[g.end];
+      const std::int64_t nb = m.block_first_node[g.begin], ne = m.block_first_node[g.end];
       std::fill(m.f.begin() + nb, m.f.begin() + ne, Vec3{});
+      if (gs) {
+#pragma omp parallel for schedule(static)
+        for (std::int64_t n = nb; n < ne; ++n) add_spring_forces(m, n, n + 1);
+      }
       continue;
     }
     switch (g.type) {
-      case ElemType::Tri3: inverted += block_forces_tri(m, g.begin, g.end, first_inverted); break;
-      case ElemType::Quad4: inverted += block_forces_quad(m, g.begin, g.end, first_inverted); break;
-      case ElemType::Tet4: inverted += block_forces_tet(m, g.begin, g.end, first_inverted); break;
+      case ElemType::Tri3: inverted += block_forces_tri(m, g.begin, g.end, first_inverted, gs); break;
+      case ElemType::Quad4: inverted += block_forces_quad(m, g.begin, g.end, first_inverted, gs); break;
+      case ElemType::Tet4: inverted += block_forces_tet(m, g.begin, g.end, first_inverted, gs); break;
     }
   }
   return inverted;

@@ -13,13 +13,15 @@
 namespace cdem {
 
 std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
-                              std::int32_t* first_inverted);
+                              std::int32_t* first_inverted, bool gather_springs = false);
 std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
-                               std::int32_t* first_inverted);
+                               std::int32_t* first_inverted, bool gather_springs = false);
 std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
-                              std::int32_t* first_inverted);
+                              std::int32_t* first_inverted, bool gather_springs = false);
 
 // All elastic groups; explosive groups are zeroed here and loaded by the explosive kernels.
-std::int64_t block_forces(Model& m, std::int32_t* first_inverted);
+// gather_springs: then each block also adds its nodes' spring forces (gather_spring_forces for
+// its nodes, same sums) right after assigning them: spring_forces must have run first.
+std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs = false);
 
 }  // namespace cdem

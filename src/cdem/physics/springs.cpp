@@ -224,17 +224,7 @@ void spring_forces(Model& m, double dt, double t) {
 void gather_spring_forces(Model& m) {
   const auto nn = static_cast<std::int64_t>(m.n_nodes());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t n = 0; n < nn; ++n) {
-    Vec3 acc{};
-    for (auto k = m.node_sp_offset[n]; k < m.node_sp_offset[n + 1]; ++k) {
-      const auto e = m.node_sp_list[k];
-      if (e > 0)
-        acc += m.sp_force[e - 1];
-      else
-        acc -= m.sp_force[-e - 1];
-    }
-    m.f[n] += acc;
-  }
+  for (std::int64_t n = 0; n < nn; ++n) add_spring_forces(m, n, n + 1);
 }
 
 }  // namespace cdem

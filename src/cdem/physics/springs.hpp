@@ -57,4 +57,21 @@ void spring_forces(Model& m, double dt, double t);
 // identical sums for any thread count). Parallel over nodes.
 void gather_spring_forces(Model& m);
 
+// The same for nodes [n0, n1): f[n] += (sum of its spring forces, in the list's order). The
+// block kernels call it for their own nodes right after assigning them (block_forces with
+// gather_springs), which saves a pass over f and a parallel region per step.
+inline void add_spring_forces(Model& m, std::int64_t n0, std::int64_t n1) {
+  for (std::int64_t n = n0; n < n1; ++n) {
+    Vec3 acc{};
+    for (auto k = m.node_sp_offset[n]; k < m.node_sp_offset[n + 1]; ++k) {
+      const auto e = m.node_sp_list[k];
+      if (e > 0)
+        acc += m.sp_force[e - 1];
+      else
+        acc -= m.sp_force[-e - 1];
+    }
+    m.f[n] += acc;
+  }
+}
+
 }  // namespace cdem

@@ -402,12 +402,13 @@ LoopResult timed_loop(const Model& snapshot, const BarCharges& bars0, const Boun
     };
     update_positions(m, dt);
     lap(kPositions);
-    std::int32_t first = -1;
-    inverted += block_forces(m, &first);
-    lap(kBlocks);
+    // As Simulation::step: springs first, then the block kernels with the gather fused in
+    // (the gather_spring_forces row stays, at ~0: its work is in block_forces).
     spring_forces(m, dt, t);
     lap(kSprings);
-    gather_spring_forces(m);
+    std::int32_t first = -1;
+    inverted += block_forces(m, &first, /*gather_springs=*/true);
+    lap(kBlocks);
     lap(kGather);
     applied.clear();
     if (!bars.empty()) bar_loads(m, bars, applied, t);

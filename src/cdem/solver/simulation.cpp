@@ -166,14 +166,13 @@ void Simulation::setup_initial_stress(const Case& c) {
 void Simulation::step(bool sample) {
   // 1. positions x(n) = x(n-1) + dt v(n-1/2)
   update_positions(m_, dt_);
-  // 2. block forces (assigns f)
+  // 2. spring forces (on x(n), independent of the block forces)
+  spring_forces(m_, dt_, t_);
+  // 3. block forces (assign f), each block adding its nodes' spring forces right after
   std::int32_t first = -1;
-  const auto inv = block_forces(m_, &first);
+  const auto inv = block_forces(m_, &first, /*gather_springs=*/true);
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
-  // 3. spring forces and their gather
-  spring_forces(m_, dt_, t_);
-  gather_spring_forces(m_);
   // 4. (general contact: not yet) 5. explosive and other loads
   applied_.clear();
   for (auto& h : loads_) h(m_, applied_, t_);

@@ -2,9 +2,9 @@
 // F = sum_i x_i (x) grad_X N_i, polar split F = R U, eps = U - I,
 // S = lambda tr(eps) I + 2 G eps (+ initial stress), nodal force f_i = -V0 R S grad_X N_i,
 // Cauchy stress (output) sigma = R S R^T. A rigid rotation gives U = I: no stress.
-// Each kernel ASSIGNS the block's nodal forces (it runs first in the step) and stores the
-// block's stress, strain energy and volume ratio J. It returns the number of inverted blocks
-// (J <= 0) in the range; the first one is written to *first_inverted.
+// Each kernel ASSIGNS the block's nodal forces (the first kernel of the step to write f) and
+// stores the block's stress, strain energy and volume ratio J. It returns the number of
+// inverted blocks (J <= 0) in the range; the first one is written to *first_inverted.
 #pragma once
 #include <cstdint>
 

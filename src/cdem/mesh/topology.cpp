@@ -307,9 +307,10 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
 
   // ---- spring point parameters (SPEC 1.3) ----
   const std::size_t ns = m.sp_a.size();
-  m.sp_area.resize(ns);
-  m.sp_kn.resize(ns);
-  m.sp_ks.resize(ns);
+  for (auto* c : {&m.sp_area, &m.sp_kn, &m.sp_ks}) {
+    c->v.assign(m.n_ifaces(), 0.0);
+    c->per = np;
+  }
   m.sp_fn.assign(ns, 0.0);
   m.sp_fs.assign(ns, Vec3{});
   m.sp_w.assign(ns, 0.0);
@@ -337,11 +338,11 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
     const double kn = im.stiffness_factor * soft->youngs / h;  // Pa/m
     const double ks = kn * soft->shear() / soft->youngs;
     const double ac = m.iface_area0[i] / np;
+    m.sp_area.v[i] = ac;
+    m.sp_kn.v[i] = kn * ac;
+    m.sp_ks.v[i] = ks * ac;
     for (int q = 0; q < np; ++q) {
       const auto s = i * np + q;
-      m.sp_area[s] = ac;
-      m.sp_kn[s] = kn * ac;
-      m.sp_ks[s] = ks * ac;
       if (im.precracked) m.sp_state[s] = kBroken;
     }
   }

@@ -18,6 +18,15 @@
 
 namespace cdem {
 
+// A spring-point quantity that is the same for every spring point of an interface (SPEC 1.3:
+// the np spring points of an interface share A_c = A / np and k A_c): stored once per interface
+// in `v`, read per spring point s as v[s / per] (per = springs_per_iface).
+struct IfaceShared {
+  std::vector<double> v;  // per interface
+  std::int32_t per = 1;   // spring points per interface
+  double operator[](std::size_t s) const { return v[s / static_cast<std::size_t>(per)]; }
+};
+
 enum class BlockKind : std::uint8_t { Elastic = 0, Explosive = 1 };
 
 struct BlockGroup {
@@ -75,8 +84,8 @@ struct Model {
                                                // previous normal of the next (springs.hpp)
   bool iface_normal_set = false;               // false: rebuild it from x - v dt
   std::vector<std::int32_t> sp_a, sp_b;        // nodes
-  std::vector<double> sp_area;                 // contact area A_c (m^2)
-  std::vector<double> sp_kn, sp_ks;            // stiffness x A_c (N/m)
+  IfaceShared sp_area;                         // contact area A_c (m^2), per interface
+  IfaceShared sp_kn, sp_ks;                    // stiffness x A_c (N/m), per interface
   std::vector<double> sp_fn;                   // normal force (N), tension positive
   std::vector<Vec3> sp_fs;                     // shear force (N), in the tangent plane
   std::vector<double> sp_w;                    // irreversible opening (m), fracture-energy law

@@ -162,6 +162,7 @@ void spring_forces(Model& m, double dt, double t) {
     if (dot(dn_vec, dn_vec) > 0.01) dn_vec = {};
     const double* g0 = m.sp_g0.empty() ? nullptr : m.sp_g0.data();
     const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+    const double kn = m.sp_kn.v[i], ks = m.sp_ks.v[i], area = m.sp_area.v[i];
     for (int q = 0; q < np; ++q) {
       const std::int64_t s = s0 + q;
       const std::uint8_t state = m.sp_state[s];
@@ -186,10 +187,8 @@ void spring_forces(Model& m, double dt, double t) {
         const double fs_proj2 = dot(fs, fs);
         // Rescale to the old magnitude: |F_s| / |F_s,proj| as one square root of the ratio.
         if (fs_proj2 > 0) fs *= std::sqrt(fs_old2 / fs_proj2);
-        const double ks = m.sp_ks[s];
         fs += ks * (du - dot(du, n) * n);
-        const double fn = m.sp_kn[s] * (dot(d, n) + off);
-        const double area = m.sp_area[s];
+        const double fn = kn * (dot(d, n) + off);
         // |F_s| < tau, tested on the squares (tau > 0 first).
         const double tau = law.c * area - fn * law.tan_phi;
         const bool holds = law.law == InterfaceLaw::Elastic ||
@@ -201,7 +200,7 @@ void spring_forces(Model& m, double dt, double t) {
           continue;
         }
       }
-      SpringPoint sp{m.sp_kn[s],   m.sp_ks[s],   m.sp_area[s],  m.sp_fn[s],
+      SpringPoint sp{kn,          ks,           area,          m.sp_fn[s],
                      m.sp_fs[s],   m.sp_w[s],    m.sp_slip[s],  m.sp_dil[s],
                      state,        m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
       const double release = m.release_distance_factor * 0.5 *

@@ -244,8 +244,8 @@ std::size_t model_bytes(const Model& m) {
        bytes_of(m.geom) + bytes_of(m.geom_offset) + bytes_of(m.stress) + bytes_of(m.stress0) +
        bytes_of(m.strain_energy) + bytes_of(m.vol_ratio);
   b += bytes_of(m.iface_block_a) + bytes_of(m.iface_block_b) + bytes_of(m.iface_material) +
-       bytes_of(m.iface_area0) + bytes_of(m.iface_normal) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area) +
-       bytes_of(m.sp_kn) + bytes_of(m.sp_ks) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
+       bytes_of(m.iface_area0) + bytes_of(m.iface_normal) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area.v) +
+       bytes_of(m.sp_kn.v) + bytes_of(m.sp_ks.v) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
        bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_g0) +
        bytes_of(m.sp_state) + bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) +
        bytes_of(m.sp_dissipated) + bytes_of(m.sp_force) + bytes_of(m.node_sp_offset) +
@@ -279,7 +279,7 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
   const double slow_fraction = m.n_springs() ? slow / static_cast<double>(m.n_springs()) : 0.0;
   s.springs = size_of(m.iface_material) + size_of(m.iface_block_a) + size_of(m.iface_block_b) +
               size_of(m.block_size) + size_of(m.sp_a) + size_of(m.sp_b) + size_of(m.x) +
-              size_of(m.v) + size_of(m.sp_kn) + size_of(m.sp_ks) + size_of(m.sp_area) +
+              size_of(m.v) + size_of(m.sp_kn.v) + size_of(m.sp_ks.v) + size_of(m.sp_area.v) +
               size_of(m.sp_g0) + size_of(m.sp_state) + 2 * size_of(m.sp_fs) + size_of(m.sp_fn) +
               2 * size_of(m.iface_normal) +
               size_of(m.sp_force) +

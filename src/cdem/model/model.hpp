@@ -48,7 +48,8 @@ struct Model {
   std::vector<Vec3> v;         // velocity at the half step (m/s)
   std::vector<Vec3> f;         // force accumulated in the current step (N)
   std::vector<double> mass;    // lumped mass (kg)
-  std::vector<double> inv_mass;
+  std::vector<double> inv_mass;       // 1 / mass for the set-up (make_charge_cavities keeps it in
+                                      // step); no kernel reads it: Simulation releases it
   std::vector<double> damping;        // mass-proportional damping coefficient (1/s); empty: 0
                                       // everywhere (see release_zero_damping, integrate.hpp)
   std::vector<double> local_damping;  // alpha_L; empty: 0 everywhere

@@ -18,6 +18,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   bc_ = prepare_boundaries(m_, c);
   setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
+  std::vector<double>().swap(m_.inv_mass);  // no kernel reads it (integrate uses mass)
   for (const auto& f : c.analysis.main_faces)
     if (!m_.facet_set(f))
       throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));

@@ -73,7 +73,8 @@ struct Model {
   std::vector<double> geom;
   std::vector<std::int64_t> geom_offset;       // size n_blocks + 1
   std::vector<Sym6> stress;                    // Cauchy stress (Pa), for output and monitors
-  std::vector<Sym6> stress0;                   // initial (in-situ) stress in the block frame
+  std::vector<Sym6> stress0;                   // initial (in-situ) stress in the block frame;
+                                               // empty: zero (Simulation releases it then)
   std::vector<double> strain_energy;           // J, current
   std::vector<double> vol_ratio;               // J = V / V0
 

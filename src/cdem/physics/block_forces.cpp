@@ -17,6 +17,13 @@ struct ElasticConst {
 
 // Plane-strain constitutive update in the co-rotated frame for one integration point.
 // Inputs F (2x2); outputs first Piola P = R S (2x2), Cauchy sigma (Sym6), energy density, det F.
+// The block's initial (in-situ) stress: stress0 is empty when it is zero everywhere
+// (Simulation releases it then).
+inline const Sym6& stress0_of(const Model& m, std::int64_t b) {
+  static const Sym6 kZero{};
+  return m.stress0.empty() ? kZero : m.stress0[b];
+}
+
 struct Point2D {
   double p00, p01, p10, p11;
   Sym6 sigma;
@@ -79,7 +86,7 @@ std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
     // F = Ds Dm^-1, Dm^-1 = [[g0, g1], [g2, g3]]
     const double f00 = d00 * g[0] + d01 * g[2], f01 = d00 * g[1] + d01 * g[3];
     const double f10 = d10 * g[0] + d11 * g[2], f11 = d10 * g[1] + d11 * g[3];
-    const Point2D pt = corot_point_2d(f00, f01, f10, f11, elastic_of(m, b), m.stress0[b]);
+    const Point2D pt = corot_point_2d(f00, f01, f10, f11, elastic_of(m, b), stress0_of(m, b));
     const double v0 = m.block_volume0[b];
     // grad N_1 = (g0, g1), grad N_2 = (g2, g3), grad N_0 = -(sum)
     const double gx[3] = {-(g[0] + g[2]), g[0], g[2]};
@@ -120,7 +127,7 @@ std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
         f10 += xn[i].y * gxi;
         f11 += xn[i].y * gyi;
       }
-      const Point2D pt = corot_point_2d(f00, f01, f10, f11, k, m.stress0[b]);
+      const Point2D pt = corot_point_2d(f00, f01, f10, f11, k, stress0_of(m, b));
       for (int i = 0; i < 4; ++i) {
         const double gxi = gq[1 + 2 * i], gyi = gq[2 + 2 * i];
         fx[i] -= wq * (pt.p00 * gxi + pt.p01 * gyi);
@@ -162,7 +169,7 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
     Mat3 R;
     const int iters = polar_3d_tet(F, R);
     const Mat3 U = transpose(R) * F;
-    const Sym6& s0 = m.stress0[b];
+    const Sym6& s0 = stress0_of(m, b);
     const double exx = U(0, 0) - 1, eyy = U(1, 1) - 1, ezz = U(2, 2) - 1;
     const double exy = 0.5 * (U(0, 1) + U(1, 0)), eyz = 0.5 * (U(1, 2) + U(2, 1)),
                  exz = 0.5 * (U(0, 2) + U(2, 0));

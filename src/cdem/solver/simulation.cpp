@@ -23,6 +23,14 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     if (!m_.facet_set(f))
       throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));
   setup_initial_stress(c);
+  // Without an in-situ stress stress0 is zero everywhere: released (the block kernels read a
+  // zero then).
+  {
+    bool zero = true;
+    for (const auto& s0 : m_.stress0)
+      for (double v : s0) zero = zero && v == 0;
+    if (zero) std::vector<Sym6>().swap(m_.stress0);
+  }
   stable_ = stable_time_step(m_, c.dt_safety);
   fixed_dt_ = c.fixed_dt;
   case_path_ = c.path;

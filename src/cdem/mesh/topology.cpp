@@ -144,7 +144,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
 
   // ---- split nodes, reference geometry, lumped masses ----
   m.X.resize(nn);
-  m.node_block.resize(nn);
+  m.node_block.first = m.block_first_node;
   m.node_vertex.resize(nn);
   m.mass.assign(nn, 0.0);
   m.damping.assign(nn, 0.0);
@@ -157,7 +157,6 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
       const auto vtx = mesh.elem_vertices[e][i];
       const auto n = m.block_first_node[b] + i;
       m.X[n] = mesh.vertices[vtx];
-      m.node_block[n] = static_cast<std::int32_t>(b);
       m.node_vertex[n] = vtx;
       p[i] = m.X[n];
     }

@@ -8,6 +8,7 @@
 // consecutive spring points (2 in 2D, 3 in 3D): spring s belongs to interface
 // s / springs_per_iface, and its node_a lies in block A, node_b in block B.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -21,6 +22,17 @@ namespace cdem {
 // A spring-point quantity that is the same for every spring point of an interface (SPEC 1.3:
 // the np spring points of an interface share A_c = A / np and k A_c): stored once per interface
 // in `v`, read per spring point s as v[s / per] (per = springs_per_iface).
+// node -> block without a per-node array: the blocks' first nodes (a copy of block_first_node,
+// 4 B per block instead of 4 B per node), read as node_block[n] by a binary search (set-up,
+// messages and tests only; no kernel reads it).
+struct NodeBlockIndex {
+  std::vector<std::int32_t> first;  // size n_blocks + 1
+  std::int32_t operator[](std::size_t n) const {
+    const auto it = std::upper_bound(first.begin(), first.end(), static_cast<std::int32_t>(n));
+    return static_cast<std::int32_t>(it - first.begin()) - 1;
+  }
+};
+
 struct IfaceShared {
   std::vector<double> v;  // per interface
   std::int32_t per = 1;   // spring points per interface
@@ -53,7 +65,7 @@ struct Model {
   std::vector<double> damping;        // mass-proportional damping coefficient (1/s); empty: 0
                                       // everywhere (see release_zero_damping, integrate.hpp)
   std::vector<double> local_damping;  // alpha_L; empty: 0 everywhere
-  std::vector<std::int32_t> node_block;
+  NodeBlockIndex node_block;           // block of node n: node_block[n]
   std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
 
   // ---- blocks ----

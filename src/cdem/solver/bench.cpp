@@ -237,7 +237,7 @@ std::size_t model_bytes(const Model& m) {
   std::size_t b = 0;
   b += bytes_of(m.X) + bytes_of(m.x) + bytes_of(m.v) + bytes_of(m.f) + bytes_of(m.mass) +
        bytes_of(m.inv_mass) + bytes_of(m.damping) + bytes_of(m.local_damping) +
-       bytes_of(m.node_block) + bytes_of(m.node_vertex);
+       bytes_of(m.node_block.first) + bytes_of(m.node_vertex);
   b += bytes_of(m.groups) + bytes_of(m.block_type) + bytes_of(m.block_first_node) +
        bytes_of(m.block_region) + bytes_of(m.block_material) + bytes_of(m.block_elem_tag) +
        bytes_of(m.block_volume0) + bytes_of(m.block_size) + bytes_of(m.block_altitude0) +

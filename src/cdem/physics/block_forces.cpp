@@ -19,9 +19,10 @@ struct ElasticConst {
 // Inputs F (2x2); outputs first Piola P = R S (2x2), Cauchy sigma (Sym6), energy density, det F.
 // The block's initial (in-situ) stress: stress0 is empty when it is zero everywhere
 // (Simulation releases it then).
-inline const Sym6& stress0_of(const Model& m, std::int64_t b) {
-  static const Sym6 kZero{};
-  return m.stress0.empty() ? kZero : m.stress0[b];
+inline Sym6 stress0_of(const Model& m, std::int64_t b) {
+  Sym6 s0{};
+  if (!m.stress0.empty()) s0 = m.stress0[b];
+  return s0;
 }
 
 struct Point2D {
@@ -169,7 +170,7 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
     Mat3 R;
     const int iters = polar_3d_tet(F, R);
     const Mat3 U = transpose(R) * F;
-    const Sym6& s0 = stress0_of(m, b);
+    const Sym6 s0 = stress0_of(m, b);
     const double exx = U(0, 0) - 1, eyy = U(1, 1) - 1, ezz = U(2, 2) - 1;
     const double exy = 0.5 * (U(0, 1) + U(1, 0)), eyz = 0.5 * (U(1, 2) + U(2, 1)),
                  exz = 0.5 * (U(0, 2) + U(2, 0));

@@ -25,12 +25,9 @@ inline void polar_2d(double f00, double f01, double f10, double f11, double& c, 
 // decomposition with applications", SIAM J. Sci. Stat. Comput. 7). Quadratic convergence:
 // a strain of 1e-3 needs 3-4 iterations to reach round-off. Returns the number of iterations;
 // det(F) <= 0 (an inverted element) returns -1 and R = identity.
-inline int polar_3d(const Mat3& F, Mat3& R) {
-  if (!(det(F) > 0)) {
-    R = Mat3::identity();
-    return -1;
-  }
-  R = F;
+// The Newton iteration itself, from the R given (det R > 0): stops when no entry changes by
+// `tol` or more, at most 30 iterations; returns the number done.
+inline int polar_newton(Mat3& R, double tol) {
   for (int it = 1; it <= 30; ++it) {
     const Mat3 it_t = transpose(inverse(R));
     double diff = 0;
@@ -39,9 +36,18 @@ inline int polar_3d(const Mat3& F, Mat3& R) {
       diff = std::max(diff, std::abs(nv - R.m[k]));
       R.m[k] = nv;
     }
-    if (diff < 1e-15) return it;
+    if (diff < tol) return it;
   }
   return 30;
+}
+
+inline int polar_3d(const Mat3& F, Mat3& R) {
+  if (!(det(F) > 0)) {
+    R = Mat3::identity();
+    return -1;
+  }
+  R = F;
+  return polar_newton(R, 1e-15);
 }
 
 }  // namespace cdem

@@ -163,8 +163,8 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       // brings to the stretch (its volume x the stretch's share of its bound length). So every
       // block bound over a stretch has the same charge fraction phi = charge volume / host
       // volume: 1 when the bound blocks exactly fill the hole, < 1 when they are larger ----
+      const double section = m.dim == 3 ? kPi * bar.r0 * bar.r0 : 2.0 * bar.r0;
       {
-        const double section = m.dim == 3 ? kPi * bar.r0 * bar.r0 : 2.0 * bar.r0;
         std::vector<double> cuts;
         for (const auto& x : iv) {
           cuts.push_back(std::clamp(x.s0, 0.0, 1.0));
@@ -188,7 +188,6 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       // A bar loads only the blocks on its line: when they are much smaller than the charge
       // (a mesh finer than the hole), part of the hole wall is not loaded.
       {
-        const double section = m.dim == 3 ? kPi * bar.r0 * bar.r0 : 2.0 * bar.r0;
         double host = 0;
         for (const auto& x : iv) host += m.block_volume0[x.block];
         const double charge = section * bar.length;
@@ -213,7 +212,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         bc.seg_bar.push_back(static_cast<std::int32_t>(bc.bars.size()));
         const double dj = (j + 0.5) * bar.h;  // distance of the centre from the initiation point
         bc.seg_t_ign.push_back(bar.t0 + dj / bar.D);
-        bc.seg_v0.push_back(m.dim == 3 ? kPi * bar.r0 * bar.r0 * bar.h : 2.0 * bar.r0 * bar.h);
+        bc.seg_v0.push_back(section * bar.h);  // eq. 8 (plane strain: 2 r0 h per metre)
         for (const auto& x : iv) {
           const double ov = std::min(a1, x.s1) - std::max(a0, x.s0);
           if (ov * bar.length <= 1e-4 * m.block_size[x.block]) continue;

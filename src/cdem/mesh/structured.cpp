@@ -65,7 +65,7 @@ void add_box_face_sets(Mesh& mesh) {
   }
 }
 
-Mesh grid_2d(int nx, int ny, double h, bool quads) {
+Mesh structured_grid_2d(int nx, int ny, double h, bool quads) {
   Mesh m;
   m.dim = 2;
   m.region_names = {"rock"};

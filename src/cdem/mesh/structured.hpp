@@ -13,6 +13,10 @@ namespace cdem {
 // vertex keys.
 void add_box_face_sets(Mesh& mesh);
 
+// nx x ny squares of side h from the origin (2D), each a quadrilateral (quads) or split into 2
+// triangles along the (i, j)-(i+1, j+1) diagonal. One region "rock"; box face sets added.
+Mesh structured_grid_2d(int nx, int ny, double h, bool quads);
+
 // nx x ny x nz cubes of size/n from `origin`, each split into the 6 tetrahedra of the Kuhn
 // triangulation (one per permutation of the axes; the same split in every cell keeps the mesh
 // conforming); odd permutations get nodes 1 and 2 swapped so every tet is right-handed. One

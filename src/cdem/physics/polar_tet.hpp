@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cdem/core/polar.hpp"
 #include "cdem/core/vec3.hpp"
 
 namespace cdem {
@@ -44,17 +45,7 @@ inline int polar_3d_tet(const Mat3& F, Mat3& R) {
                                  std::abs(col_dot(1, 2)), std::abs(col_dot(0, 2))});
     if (dev < 1e-15) return 0;
   }
-  for (int it = 1; it <= 30; ++it) {
-    const Mat3 it_t = transpose(inverse(R));
-    double diff = 0;
-    for (int k = 0; k < 9; ++k) {
-      const double nv = 0.5 * (R.m[k] + it_t.m[k]);
-      diff = std::max(diff, std::abs(nv - R.m[k]));
-      R.m[k] = nv;
-    }
-    if (diff < 1e-9) return it;  // error left <= ~18 diff^2 (above)
-  }
-  return 30;
+  return polar_newton(R, 1e-9);  // error left <= ~18 diff^2 (above)
 }
 
 }  // namespace cdem

@@ -19,6 +19,7 @@
 #include "cdem/mesh/topology.hpp"
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/mesh/structured.hpp"
+#include "cdem/solver/run.hpp"
 #include "cdem/physics/boundaries.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
@@ -27,32 +28,6 @@
 namespace cdem {
 namespace bench {
 namespace {
-
-Mesh grid_2d(int nx, int ny, double h, bool quads) {
-  Mesh m;
-  m.dim = 2;
-  m.region_names = {"rock"};
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i) m.vertices.push_back({h * i, h * j, 0.0});
-  auto vid = [&](int i, int j) { return static_cast<std::int32_t>(j * (nx + 1) + i); };
-  auto add = [&](ElemType t, std::array<std::int32_t, 4> v) {
-    m.elem_type.push_back(t);
-    m.elem_vertices.push_back(v);
-    m.elem_region.push_back(0);
-    m.elem_tag.push_back(static_cast<std::int64_t>(m.elem_tag.size() + 1));
-  };
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      if (quads) {
-        add(ElemType::Quad4, {vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)});
-      } else {
-        add(ElemType::Tri3, {vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), -1});
-        add(ElemType::Tri3, {vid(i, j), vid(i + 1, j + 1), vid(i, j + 1), -1});
-      }
-    }
-  add_box_face_sets(m);
-  return m;
-}
 
 // splitmix64: a deterministic hash for the pseudo-random benchmark state.
 std::uint64_t mix(std::uint64_t z) {
@@ -84,8 +59,8 @@ Mesh structured_tet_box(int nx, int ny, int nz, double h) {
   return cdem::structured_tet_box(nx, ny, nz, {h * nx, h * ny, h * nz});
 }
 
-Mesh structured_tri_grid(int nx, int ny, double h) { return grid_2d(nx, ny, h, false); }
-Mesh structured_quad_grid(int nx, int ny, double h) { return grid_2d(nx, ny, h, true); }
+Mesh structured_tri_grid(int nx, int ny, double h) { return structured_grid_2d(nx, ny, h, false); }
+Mesh structured_quad_grid(int nx, int ny, double h) { return structured_grid_2d(nx, ny, h, true); }
 
 std::array<int, 3> tet_cells_for(std::int64_t blocks) {
   const double cubes = std::max(1.0, static_cast<double>(blocks) / 6.0);
@@ -464,12 +439,10 @@ int run_bench(const BenchOptions& opt) {
   const double setup0 = omp_get_wtime();
   omp_set_num_threads(threads);
   const Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], h);
-  Model model = build_model(mesh, c.materials, c.interfaces, c.path);
-  BarCharges bars = build_bar_charges(model, c);
-  const double sim_dt_bar = make_charge_cavities(model, bars);
-  Simulation sim(std::move(model), c);
-  sim.limit_dt(sim_dt_bar, "blocks holding bar charges");
-  sim.add_load([&bars](Model& mm, AppliedLoads& out, double t) { bar_loads(mm, bars, out, t); });
+  PreparedCase pc = prepare_case(c, mesh);  // as `cdemblast run` sets a case up
+  add_charge_loads(pc);
+  Simulation& sim = pc.sim;
+  const BarCharges& bars = pc.bars;
   const double setup_s = omp_get_wtime() - setup0;
 
   const Model& m0 = sim.model();

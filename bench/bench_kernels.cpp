@@ -92,7 +92,7 @@ void BM_SpringForces(benchmark::State& state, Shape shape, InterfaceLaw law, dou
   double broke = 0, soft = 0, contact = 0;
   for (std::size_t s = 0; s < m.n_springs(); ++s) {
     broke += m.sp_state[s] != kIntact;
-    soft += m.sp_state[s] == kIntact && (m.sp_w[s] > 0 || m.sp_slip[s] > 0);
+    soft += m.sp_state[s] == kIntact && !m.sp_w.empty() && (m.sp_w[s] > 0 || m.sp_slip[s] > 0);
     contact += m.sp_state[s] == kBroken && m.sp_fn[s] < 0;
   }
   const double ns = static_cast<double>(m.n_springs());

@@ -100,7 +100,7 @@ inline double stable_dt(const Model& m) { return stable_time_step(m, 0.5).dt; }
 // starts from the same state (breaking and softening are irreversible).
 struct SpringState {
   std::vector<double> fn, w, slip, dil, dissipated;
-  std::vector<Vec3> fs, force;
+  std::vector<Vec3> fs, normal;
   std::vector<std::uint8_t> state, mode;
   std::vector<float> break_time;
   explicit SpringState(const Model& m)
@@ -110,7 +110,7 @@ struct SpringState {
         dil(m.sp_dil),
         dissipated(m.sp_dissipated),
         fs(m.sp_fs),
-        force(m.sp_force),
+        normal(m.iface_normal),
         state(m.sp_state),
         mode(m.sp_mode),
         break_time(m.sp_break_time) {}
@@ -121,7 +121,7 @@ struct SpringState {
     std::copy(dil.begin(), dil.end(), m.sp_dil.begin());
     std::copy(dissipated.begin(), dissipated.end(), m.sp_dissipated.begin());
     std::copy(fs.begin(), fs.end(), m.sp_fs.begin());
-    std::copy(force.begin(), force.end(), m.sp_force.begin());
+    std::copy(normal.begin(), normal.end(), m.iface_normal.begin());
     std::copy(state.begin(), state.end(), m.sp_state.begin());
     std::copy(mode.begin(), mode.end(), m.sp_mode.begin());
     std::copy(break_time.begin(), break_time.end(), m.sp_break_time.begin());

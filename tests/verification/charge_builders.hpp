@@ -138,7 +138,7 @@ void remove_elements(Mesh& mesh, Pred pred) {
 inline Vec3 centroid0(const Model& m, std::int32_t b) {
   Vec3 c{};
   const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
-  for (auto n = n0; n < n1; ++n) c += m.X[n];
+  for (auto n = n0; n < n1; ++n) c += m.X(n);
   return c / (n1 - n0);
 }
 
@@ -187,11 +187,11 @@ inline bool point_in_block(const Model& m, std::int32_t b, Vec3 p, double tol) {
   };
   switch (m.block_type[b]) {
     case ElemType::Tri3:
-      return in_tri(m.X[n0], m.X[n0 + 1], m.X[n0 + 2]);
+      return in_tri(m.X(n0), m.X(n0 + 1), m.X(n0 + 2));
     case ElemType::Quad4:
-      return in_tri(m.X[n0], m.X[n0 + 1], m.X[n0 + 2]) || in_tri(m.X[n0], m.X[n0 + 2], m.X[n0 + 3]);
+      return in_tri(m.X(n0), m.X(n0 + 1), m.X(n0 + 2)) || in_tri(m.X(n0), m.X(n0 + 2), m.X(n0 + 3));
     case ElemType::Tet4: {
-      const Vec3 a = m.X[n0], e1 = m.X[n0 + 1] - a, e2 = m.X[n0 + 2] - a, e3 = m.X[n0 + 3] - a;
+      const Vec3 a = m.X(n0), e1 = m.X(n0 + 1) - a, e2 = m.X(n0 + 2) - a, e3 = m.X(n0 + 3) - a;
       const double v = dot(e1, cross(e2, e3));
       const Vec3 q = p - a;
       const double l1 = dot(q, cross(e2, e3)) / v, l2 = dot(e1, cross(q, e3)) / v,

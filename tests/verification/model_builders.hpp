@@ -195,7 +195,7 @@ inline Mat3 quarter_turn_z() { return Mat3{{0, -1, 0, 1, 0, 0, 0, 0, 1}}; }
 
 // x = c + A (X - c) for every node.
 inline void apply_map(Model& m, const Mat3& A, Vec3 c = {}) {
-  for (std::size_t n = 0; n < m.n_nodes(); ++n) m.x[n] = c + A * (m.X[n] - c);
+  for (std::size_t n = 0; n < m.n_nodes(); ++n) m.x[n] = c + A * (m.X(n) - c);
 }
 
 inline Mat3 from_sym6(const Sym6& s) {

@@ -51,7 +51,7 @@ Snapshot run_with_threads(const Model& model, const Case& c, int threads, std::i
   add(s, "vol_ratio", m.vol_ratio);
   add(s, "sp_fn", m.sp_fn);
   add(s, "sp_fs", m.sp_fs);
-  add(s, "sp_force", m.sp_force);
+  add(s, "iface_normal", m.iface_normal);
   add(s, "sp_w", m.sp_w);
   add(s, "sp_slip", m.sp_slip);
   add(s, "sp_dil", m.sp_dil);

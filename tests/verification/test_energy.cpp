@@ -57,25 +57,25 @@ VibrationResult vibrate(const Mesh& mesh, Start start, double n_periods_min, dou
   const auto glue = interface_of(InterfaceLaw::Elastic);
   Model model = make_model(mesh, mat, glue);
   double x0 = 1e300, x1 = -1e300;
-  for (const auto& p : model.X) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+  for (const auto& p : model.X_nodes()) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
   const double len = x1 - x0;
   std::vector<std::int32_t> left, right;
   for (std::size_t n = 0; n < model.n_nodes(); ++n) {
-    if (model.X[n].x < x0 + 1e-9) left.push_back(static_cast<std::int32_t>(n));
-    if (model.X[n].x > x1 - 1e-9) right.push_back(static_cast<std::int32_t>(n));
+    if (model.X(n).x < x0 + 1e-9) left.push_back(static_cast<std::int32_t>(n));
+    if (model.X(n).x > x1 - 1e-9) right.push_back(static_cast<std::int32_t>(n));
   }
   Vec3 c{};
-  for (const auto& p : model.X) c += p;
+  for (const auto& p : model.X_nodes()) c += p;
   c = c / static_cast<double>(model.n_nodes());
   const double eps0 = 1e-4, v0 = 0.1, p0 = 1e6, t_pulse = 4e-4;
   double e_kin0 = 0;
   Case cs = make_case({mat}, {glue}, dt_safety);
   if (start == Start::Stretch) {
     for (std::size_t n = 0; n < model.n_nodes(); ++n)
-      model.x[n].x = c.x + (1 + eps0) * (model.X[n].x - c.x);
+      model.x[n].x = c.x + (1 + eps0) * (model.X(n).x - c.x);
   } else if (start == Start::Velocity) {
     for (std::size_t n = 0; n < model.n_nodes(); ++n) {
-      model.v[n] = {v0 * std::cos(kPi * (model.X[n].x - x0) / len), 0, 0};
+      model.v[n] = {v0 * std::cos(kPi * (model.X(n).x - x0) / len), 0, 0};
       e_kin0 += 0.5 * model.mass[n] * dot(model.v[n], model.v[n]);
     }
   } else {

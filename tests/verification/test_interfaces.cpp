@@ -308,7 +308,7 @@ Vec3 drive(TwoBody& tb, Vec3 u, Vec3& u_prev, double t) {
   Model& m = tb.m;
   for (auto& v : m.v) v = {};
   for (auto n : tb.upper_nodes) {
-    m.x[n] = m.X[n] + u;
+    m.x[n] = m.X(n) + u;
     m.v[n] = (u - u_prev) / dt;
   }
   u_prev = u;
@@ -358,7 +358,7 @@ TEST(Interfaces, MohrCoulombTwoBlocks) {
       // The glued (elastic) interfaces inside the cubes carry nothing under a rigid motion.
       for (std::size_t s = 0; s < tb.m.n_springs(); ++s)
         if (tb.m.iface_material[s / tb.m.springs_per_iface] != 0) {
-          EXPECT_EQ(norm(tb.m.sp_force[s]), 0.0);
+          EXPECT_EQ(norm(spring_force(tb.m, s)), 0.0);
         }
       for (auto s : tb.springs) EXPECT_EQ(tb.m.sp_mode[s], kModeTension);
     }

@@ -247,7 +247,7 @@ Lame2DResult run_lame_2d(double alpha, double b_over_a, int n_theta, double ramp
       const Vec3 X = pm.mesh.vertices[v];
       const Vec3 er = X / norm(X);
       double uv = 0;
-      for (auto n : vnodes[v]) uv += dot(m.x[n] - m.X[n], er);
+      for (auto n : vnodes[v]) uv += dot(m.x[n] - m.X(n), er);
       s += uv / vnodes[v].size();
       ++cnt;
     }
@@ -278,7 +278,7 @@ Lame2DResult run_lame_2d(double alpha, double b_over_a, int n_theta, double ramp
     const auto e = m.block_elem_tag[blk] - 1;
     const int i = static_cast<int>(e % nr);
     Vec3 cen{};
-    for (auto n = m.block_first_node[blk]; n < m.block_first_node[blk + 1]; ++n) cen += m.X[n];
+    for (auto n = m.block_first_node[blk]; n < m.block_first_node[blk + 1]; ++n) cen += m.X(n);
     const double th = std::atan2(cen.y, cen.x), cs = std::cos(th), sn = std::sin(th);
     const Sym6& s = m.stress[blk];
     sr[i] += s[0] * cs * cs + s[1] * sn * sn + 2 * s[3] * sn * cs;
@@ -458,7 +458,8 @@ Lame3DResult run_lame_3d(double alpha, double b_over_a, double beta, double ramp
   for (std::size_t k = 0; k < m.n_blocks(); ++k) vol += m.block_volume0[k];
   for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
     const auto s0 = i * m.springs_per_iface;
-    sum += m.iface_area0[i] / (m.sp_kn[s0] / m.sp_area[s0]);
+    // the face area: the interface's np spring points share it (A_c = A / np)
+    sum += m.springs_per_iface * m.sp_area[s0] / (m.sp_kn[s0] / m.sp_area[s0]);
   }
   res.rho_n = sum / vol;
   const double lam = probe.lambda(), g = probe.shear(), kb = probe.bulk();
@@ -475,7 +476,7 @@ Lame3DResult run_lame_3d(double alpha, double b_over_a, double beta, double ramp
     const Vec3 X = mesh.vertices[v];
     const Vec3 er = X / norm(X);
     double uv = 0;
-    for (auto n : vnodes[v]) uv += dot(m.x[n] - m.X[n], er);
+    for (auto n : vnodes[v]) uv += dot(m.x[n] - m.X(n), er);
     return uv / vnodes[v].size();
   };
   std::vector<double> u_before;
@@ -518,7 +519,7 @@ Lame3DResult run_lame_3d(double alpha, double b_over_a, double beta, double ramp
   for (std::size_t k = 0; k < m.n_blocks(); ++k) {
     Vec3 p[4], cen{};
     for (int q = 0; q < 4; ++q) {
-      p[q] = m.X[m.block_first_node[k] + q];
+      p[q] = m.X(m.block_first_node[k] + q);
       cen += 0.25 * p[q];
     }
     const int bi = bin_of(norm(cen));

@@ -104,12 +104,12 @@ PatchErrors run_patch(Model& m, const Mat3& eps, const Mat3& Q, const BlockMater
   const Mat3 F = plus_identity(eps);
   const Mat3 A = Q * F;
   Vec3 c{};
-  for (const auto& p : m.X) c += p;
+  for (const auto& p : m.X_nodes()) c += p;
   c = c / static_cast<double>(m.n_nodes());
   apply_map(m, A, c);
   // Velocities as if the map had been reached in one step of dt from the reference state.
   const double dt = 1e-6;
-  for (std::size_t n = 0; n < m.n_nodes(); ++n) m.v[n] = (m.x[n] - m.X[n]) / dt;
+  for (std::size_t n = 0; n < m.n_nodes(); ++n) m.v[n] = (m.x[n] - m.X(n)) / dt;
   std::int32_t first = -1;
   EXPECT_EQ(block_forces(m, &first), 0);
   const Sym6 eps6 = to_sym6(eps);
@@ -144,7 +144,7 @@ PatchErrors run_patch(Model& m, const Mat3& eps, const Mat3& Q, const BlockMater
   const Mat3 P = Q * from_sym6(s_local);
   for (const auto& face : boundary_faces(m)) {
     std::vector<Vec3> p;
-    for (auto n : face) p.push_back(m.X[n]);
+    for (auto n : face) p.push_back(m.X(n));
     const int k = static_cast<int>(face.size());
     const Vec3 a0 = face_area_vector(std::span<const Vec3>(p.data(), k), k);
     for (auto n : face) {
@@ -164,7 +164,7 @@ PatchErrors run_patch(Model& m, const Mat3& eps, const Mat3& Q, const BlockMater
   // Spring points: the coincident nodes moved together; no spring force may arise.
   spring_forces(m, dt, dt);
   for (std::size_t s = 0; s < m.n_springs(); ++s)
-    err.spring = std::max(err.spring, norm(m.sp_force[s]) / fscale);
+    err.spring = std::max(err.spring, norm(spring_force(m, s)) / fscale);
   return err;
 }
 
@@ -323,7 +323,7 @@ TEST(Patch, RigidRotationGivesNoStress) {
   auto check = [&](const Mesh& mesh, const Mat3& Q, const std::string& what) {
     Model m = make_model(mesh, mat, interface_of(InterfaceLaw::MohrCoulomb));
     Vec3 c{};
-    for (const auto& p : m.X) c += p;
+    for (const auto& p : m.X_nodes()) c += p;
     apply_map(m, Q, c / static_cast<double>(m.n_nodes()));
     block_forces(m, nullptr);
     double smax = 0, fmax = 0;
@@ -382,17 +382,19 @@ RotationResult rotate_two_blocks(int dim, Vec3 preload, Vec3 axis, double angle,
   // Preload: block B of the interface moves by `preload`.
   const auto bb = m.iface_block_b[0];
   for (auto n = m.block_first_node[bb]; n < m.block_first_node[bb + 1]; ++n) {
-    m.x[n] = m.X[n] + preload;
+    m.x[n] = m.X(n) + preload;
     m.v[n] = preload / dt;
   }
   spring_forces(m, dt, 0.0);
   const std::vector<Vec3> x0 = m.x;
   const std::vector<double> fn0 = m.sp_fn;
-  const std::vector<Vec3> fs0 = m.sp_fs, f0 = m.sp_force;
+  const std::vector<Vec3> fs0 = m.sp_fs;
+  std::vector<Vec3> f0(m.n_springs());
+  for (std::size_t s = 0; s < m.n_springs(); ++s) f0[s] = spring_force(m, s);
   double fscale = 0;
   for (const auto& f : f0) fscale = std::max(fscale, norm(f));
   Vec3 c{};
-  for (const auto& p : m.X) c += p;
+  for (const auto& p : m.X_nodes()) c += p;
   c = c / static_cast<double>(m.n_nodes());
   std::vector<Vec3> xprev = x0;
   for (int k = 1; k <= nsteps; ++k) {
@@ -409,14 +411,15 @@ RotationResult rotate_two_blocks(int dim, Vec3 preload, Vec3 axis, double angle,
       // The blocks stay unstrained with or without preload (it shifts block B rigidly).
       r.max_stress = std::max(r.max_stress, max_abs(m.stress[b]));
     }
-    for (const auto& f : m.sp_force) r.max_spring = std::max(r.max_spring, norm(f));
+    for (std::size_t s = 0; s < m.n_springs(); ++s)
+      r.max_spring = std::max(r.max_spring, norm(spring_force(m, s)));
   }
   const Mat3 Q = rotation(axis, angle);
   if (fscale > 0) {
     for (std::size_t s = 0; s < m.n_springs(); ++s) {
       r.fn_err = std::max(r.fn_err, std::abs(m.sp_fn[s] - fn0[s]) / fscale);
       r.fs_err = std::max(r.fs_err, norm(m.sp_fs[s] - Q * fs0[s]) / fscale);
-      r.f_err = std::max(r.f_err, norm(m.sp_force[s] - Q * f0[s]) / fscale);
+      r.f_err = std::max(r.f_err, norm(spring_force(m, s) - Q * f0[s]) / fscale);
     }
   }
   return r;

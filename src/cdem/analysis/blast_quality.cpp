@@ -65,7 +65,7 @@ BlastQuality blast_quality(const Model& m, const Case& c) {
   for (std::size_t b = 0; b < nb; ++b) {
     const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
     Vec3 s{};
-    for (auto n = n0; n < n1; ++n) s += m.X[n];
+    for (auto n = n0; n < n1; ++n) s += m.X(n);
     cen0[b] = s / (n1 - n0);
     vol0[b] = m.block_materials[m.block_material[b]].rock_fraction() * m.block_volume0[b];
   }
@@ -84,7 +84,7 @@ BlastQuality blast_quality(const Model& m, const Case& c) {
     in.surface_level = c.analysis.surface_level;
   } else {
     double top = -std::numeric_limits<double>::infinity();
-    for (const auto& p : m.X) top = std::max(top, dot(p, in.up));
+    for (const auto& p : m.X_nodes()) top = std::max(top, dot(p, in.up));
     in.surface_level = top;
   }
   in.damage_threshold = c.analysis.damage_threshold;

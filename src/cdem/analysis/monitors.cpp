@@ -22,11 +22,11 @@ bool inside(const Model& m, std::int32_t b, Vec3 p) {
     return l0 >= -tol && l1 >= -tol && 1 - l0 - l1 >= -tol;
   };
   switch (t) {
-    case ElemType::Tri3: return tri_in(m.X[n0], m.X[n0 + 1], m.X[n0 + 2]);
+    case ElemType::Tri3: return tri_in(m.X(n0), m.X(n0 + 1), m.X(n0 + 2));
     case ElemType::Quad4:
-      return tri_in(m.X[n0], m.X[n0 + 1], m.X[n0 + 2]) || tri_in(m.X[n0], m.X[n0 + 2], m.X[n0 + 3]);
+      return tri_in(m.X(n0), m.X(n0 + 1), m.X(n0 + 2)) || tri_in(m.X(n0), m.X(n0 + 2), m.X(n0 + 3));
     case ElemType::Tet4: {
-      const Vec3 a = m.X[n0], bb = m.X[n0 + 1], c = m.X[n0 + 2], d = m.X[n0 + 3];
+      const Vec3 a = m.X(n0), bb = m.X(n0 + 1), c = m.X(n0 + 2), d = m.X(n0 + 3);
       const double v = dot(bb - a, cross(c - a, d - a));
       const double l1 = dot(p - a, cross(c - a, d - a)) / v;
       const double l2 = dot(bb - a, cross(p - a, d - a)) / v;
@@ -66,7 +66,7 @@ MonitorSample sample_block(const Model& m, std::int32_t b) {
   s.pressure = pressure(s.stress);
   const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
   for (auto n = n0; n < n1; ++n) {
-    s.displacement += m.x[n] - m.X[n];
+    s.displacement += m.x[n] - m.X(n);
     s.velocity += m.v[n];
   }
   s.displacement = s.displacement / (n1 - n0);

@@ -9,6 +9,7 @@
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/element_geometry.hpp"
+#include "cdem/physics/springs.hpp"
 
 namespace cdem {
 namespace {
@@ -30,7 +31,7 @@ bool clip(const Model& m, std::int32_t b, Vec3 p, Vec3 d, double tol, double& s0
   s1 = 1.0;
   for (int k = 0; k < lf.count; ++k) {
     Vec3 q[3];
-    for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = m.X[n0 + lf.f[k][i]];
+    for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = m.X(n0 + lf.f[k][i]);
     const Vec3 n = normalized(face_area_vector(std::span<const Vec3>(q, lf.nodes_per_face), lf.nodes_per_face));
     // inside: (p + s d - q0) . n <= tol
     const double a = dot(p - q[0], n) - tol, bd = dot(d, n);
@@ -49,11 +50,11 @@ bool clip(const Model& m, std::int32_t b, Vec3 p, Vec3 d, double tol, double& s0
 }
 
 void block_bbox(const Model& m, std::int32_t b, Vec3& lo, Vec3& hi) {
-  lo = hi = m.X[m.block_first_node[b]];
+  lo = hi = m.X(m.block_first_node[b]);
   for (auto n = m.block_first_node[b] + 1; n < m.block_first_node[b + 1]; ++n)
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], m.X[n][k]);
-      hi[k] = std::max(hi[k], m.X[n][k]);
+      lo[k] = std::min(lo[k], m.X(n)[k]);
+      hi[k] = std::max(hi[k], m.X(n)[k]);
     }
 }
 
@@ -415,7 +416,7 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
     if (m.block_materials[m.block_material[b]].explosive.empty()) continue;
     Vec3 cen{};
     const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
-    for (auto n = n0; n < n1; ++n) cen += m.X[n];
+    for (auto n = n0; n < n1; ++n) cen += m.X(n);
     cen = cen / (n1 - n0);
     // The deck whose axis segment is nearest, within its radius plus the block size.
     int best = -1;
@@ -479,17 +480,14 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
       // Its unbreakable interfaces would otherwise keep pulling the rock blocks around it into
       // the collapse (SPEC 5.2 study: a tied rock block inverted next). Their stored energy is
       // booked as dissipated, so the energy balance stays closed.
-      for (auto n = n0; n < n0 + nn; ++n)
-        for (auto q = m.node_sp_offset[n]; q < m.node_sp_offset[n + 1]; ++q) {
-          const auto e = m.node_sp_list[q];
-          const auto sp = static_cast<std::size_t>((e > 0 ? e : -e) - 1);
-          if (m.sp_state[sp] == kReleased) continue;
-          m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
-                                 0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
-          m.sp_state[sp] = kReleased;
-          m.sp_fn[sp] = 0;
-          m.sp_fs[sp] = {};
-        }
+      for_each_block_spring(m, b, [&m](std::size_t sp) {
+        if (m.sp_state[sp] == kReleased) return;
+        m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
+                               0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
+        m.sp_state[sp] = kReleased;
+        m.sp_fn[sp] = 0;
+        m.sp_fs[sp] = {};
+      });
     }
     const auto& ch = sc.charges[sc.charge[i]];
     const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);

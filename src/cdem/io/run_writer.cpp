@@ -89,7 +89,7 @@ void RunWriter::write_fields(const Model& m, double t) {
   }
   VtuArray disp{"displacement", 3, {}, {}}, vel{"velocity", 3, {}, {}};
   for (std::size_t n = 0; n < m.n_nodes(); ++n) {
-    const Vec3 u = m.x[n] - m.X[n];
+    const Vec3 u = m.x[n] - m.X(n);
     disp.f64.insert(disp.f64.end(), {u.x, u.y, u.z});
     vel.f64.insert(vel.f64.end(), {m.v[n].x, m.v[n].y, m.v[n].z});
   }

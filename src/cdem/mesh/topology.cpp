@@ -143,7 +143,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   m.geom.assign(static_cast<std::size_t>(ng), 0.0);
 
   // ---- split nodes, reference geometry, lumped masses ----
-  m.X.resize(nn);
+  m.vertex_X = mesh.vertices;
   m.node_block.first = m.block_first_node;
   m.node_vertex.resize(nn);
   m.mass.assign(nn, 0.0);
@@ -156,9 +156,8 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
     for (int i = 0; i < k; ++i) {
       const auto vtx = mesh.elem_vertices[e][i];
       const auto n = m.block_first_node[b] + i;
-      m.X[n] = mesh.vertices[vtx];
       m.node_vertex[n] = vtx;
-      p[i] = m.X[n];
+      p[i] = m.X(n);
     }
     const std::span<const Vec3> ps(p.data(), k);
     const double meas = signed_measure(m.block_type[b], ps);
@@ -199,7 +198,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   }
   m.inv_mass.resize(nn);
   for (std::int32_t n = 0; n < nn; ++n) m.inv_mass[n] = 1.0 / m.mass[n];
-  m.x = m.X;
+  m.x = m.X_nodes();
   m.v.assign(nn, Vec3{});
   m.f.assign(nn, Vec3{});
   m.stress.assign(ne, Sym6{});
@@ -271,6 +270,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   // Boundary lookup for face sets: key -> the owning (first) block face.
   std::vector<std::pair<std::array<std::int32_t, 3>, FaceRef>> face_index;
   face_index.reserve(faces.size());
+  std::vector<double> iface_area0;  // reference face areas (m^2; 2D: length x 1 m), per interface
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
     while (j < faces.size() && faces[j].key == faces[i].key) ++j;
@@ -296,10 +296,10 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
           if (m.node_vertex[n] == m.node_vertex[na]) nb = n;
         m.sp_a.push_back(na);
         m.sp_b.push_back(nb);
-        fp[q] = m.X[na];
+        fp[q] = m.X(na);
       }
       const double area = norm(face_area_vector(std::span<const Vec3>(fp.data(), np), np));
-      m.iface_area0.push_back(area);
+      iface_area0.push_back(area);
     }
     i = j;
   }
@@ -319,7 +319,6 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   m.sp_mode.assign(ns, kModeNone);
   m.sp_break_time.assign(ns, -1.0f);
   m.sp_dissipated.assign(ns, 0.0);
-  m.sp_force.assign(ns, Vec3{});
   m.iface_normal.assign(m.n_ifaces(), Vec3{});
   m.iface_normal_set = false;
   for (const auto& im : m.iface_materials) m.spring_laws.push_back(make_spring_law(im));
@@ -336,7 +335,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
     const double h = 0.5 * (m.block_size[ba] + m.block_size[bb]);
     const double kn = im.stiffness_factor * soft->youngs / h;  // Pa/m
     const double ks = kn * soft->shear() / soft->youngs;
-    const double ac = m.iface_area0[i] / np;
+    const double ac = iface_area0[i] / np;
     m.sp_area.v[i] = ac;
     m.sp_kn.v[i] = kn * ac;
     m.sp_ks.v[i] = ks * ac;
@@ -346,19 +345,19 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
     }
   }
 
-  // ---- node -> spring CSR (gathered in a fixed order: deterministic sums) ----
-  m.node_sp_offset.assign(nn + 1, 0);
-  for (std::size_t s = 0; s < ns; ++s) {
-    ++m.node_sp_offset[m.sp_a[s] + 1];
-    ++m.node_sp_offset[m.sp_b[s] + 1];
+  // ---- block -> interface CSR, ascending interface (the gather's fixed order) ----
+  m.block_iface_offset.assign(ne + 1, 0);
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    ++m.block_iface_offset[m.iface_block_a[i] + 1];
+    ++m.block_iface_offset[m.iface_block_b[i] + 1];
   }
-  for (std::int32_t n = 0; n < nn; ++n) m.node_sp_offset[n + 1] += m.node_sp_offset[n];
-  m.node_sp_list.resize(2 * ns);
+  for (std::size_t b = 0; b < ne; ++b) m.block_iface_offset[b + 1] += m.block_iface_offset[b];
+  m.block_iface_list.resize(2 * m.n_ifaces());
   {
-    std::vector<std::int32_t> fill(m.node_sp_offset.begin(), m.node_sp_offset.end() - 1);
-    for (std::size_t s = 0; s < ns; ++s) {
-      m.node_sp_list[fill[m.sp_a[s]]++] = static_cast<std::int32_t>(s + 1);
-      m.node_sp_list[fill[m.sp_b[s]]++] = -static_cast<std::int32_t>(s + 1);
+    std::vector<std::int32_t> fill(m.block_iface_offset.begin(), m.block_iface_offset.end() - 1);
+    for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+      m.block_iface_list[fill[m.iface_block_a[i]]++] = static_cast<std::int32_t>(i + 1);
+      m.block_iface_list[fill[m.iface_block_b[i]]++] = -static_cast<std::int32_t>(i + 1);
     }
   }
 

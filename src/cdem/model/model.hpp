@@ -55,7 +55,15 @@ struct Model {
   int springs_per_iface = 0;
 
   // ---- nodes (one per block corner) ----
-  std::vector<Vec3> X;         // reference position (m)
+  // Reference positions: per mesh vertex (the nodes split from a vertex share it), read per node
+  // as X(n); 24 B per vertex instead of 24 B per node (a tet mesh has ~5.5 tets per vertex).
+  std::vector<Vec3> vertex_X;  // reference position of each mesh vertex (m)
+  Vec3 X(std::size_t n) const { return vertex_X[static_cast<std::size_t>(node_vertex[n])]; }
+  std::vector<Vec3> X_nodes() const {  // the reference position of every node (a copy)
+    std::vector<Vec3> out(node_vertex.size());
+    for (std::size_t n = 0; n < out.size(); ++n) out[n] = X(n);
+    return out;
+  }
   std::vector<Vec3> x;         // current position (m)
   std::vector<Vec3> v;         // velocity at the half step (m/s)
   std::vector<Vec3> f;         // force accumulated in the current step (N)
@@ -93,7 +101,6 @@ struct Model {
   // ---- interfaces and spring points ----
   std::vector<std::int32_t> iface_block_a, iface_block_b;
   std::vector<std::int32_t> iface_material;    // index into spring_laws / iface_materials
-  std::vector<double> iface_area0;             // reference face area (m^2; 2D: length x 1 m)
   std::vector<Vec3> iface_normal;              // unit normal at the last spring_forces call: the
                                                // previous normal of the next (springs.hpp)
   bool iface_normal_set = false;               // false: rebuild it from x - v dt
@@ -102,6 +109,8 @@ struct Model {
   IfaceShared sp_kn, sp_ks;                    // stiffness x A_c (N/m), per interface
   std::vector<double> sp_fn;                   // normal force (N), tension positive
   std::vector<Vec3> sp_fs;                     // shear force (N), in the tangent plane
+  // Fracture-energy state; empty when no interface law needs it (release_unused_spring_state,
+  // springs.hpp): the other laws never change it from 0.
   std::vector<double> sp_w;                    // irreversible opening (m), fracture-energy law
   std::vector<double> sp_slip;                 // accumulated plastic slip (m)
   std::vector<double> sp_dil;                  // dilation opening (m)
@@ -111,9 +120,11 @@ struct Model {
   std::vector<std::uint8_t> sp_mode;           // BreakMode
   std::vector<float> sp_break_time;            // s (-1 intact)
   std::vector<double> sp_dissipated;           // J, fracture + friction + plastic work
-  std::vector<Vec3> sp_force;                  // force on node a (node b gets minus this)
-  std::vector<std::int32_t> node_sp_offset;    // CSR node -> spring points, size n_nodes + 1
-  std::vector<std::int32_t> node_sp_list;      // s + 1 when node is a, -(s + 1) when b
+  // The force of spring point s on node a (node b gets minus it) is not stored: it is
+  // sp_fn[s] * iface_normal[s / springs_per_iface] + sp_fs[s] (spring_force, springs.hpp).
+  std::vector<std::int32_t> block_iface_offset;  // CSR block -> interfaces, size n_blocks + 1
+  std::vector<std::int32_t> block_iface_list;    // i + 1 when the block is A, -(i + 1) when B;
+                                                 // ascending i
 
   // ---- materials ----
   std::vector<BlockMaterial> block_materials;

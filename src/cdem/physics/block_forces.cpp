@@ -95,7 +95,7 @@ std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
     for (int i = 0; i < 3; ++i)
       m.f[n0 + i] = {-v0 * (pt.p00 * gx[i] + pt.p01 * gy[i]),
                      -v0 * (pt.p10 * gx[i] + pt.p11 * gy[i]), 0.0};
-    if (gather_springs) add_spring_forces(m, n0, n0 + 3);
+    if (gather_springs) add_spring_forces(m, b);
     m.stress[b] = pt.sigma;
     m.strain_energy[b] = v0 * pt.w;
     m.vol_ratio[b] = pt.j;
@@ -140,7 +140,7 @@ std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
       vol += wq;
     }
     for (int i = 0; i < 4; ++i) m.f[n0 + i] = {fx[i], fy[i], 0.0};
-    if (gather_springs) add_spring_forces(m, n0, n0 + 4);
+    if (gather_springs) add_spring_forces(m, b);
     for (int c = 0; c < 6; ++c) sig[c] /= vol;
     m.stress[b] = sig;
     m.strain_energy[b] = w;
@@ -193,7 +193,7 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
       fsum += fj;
     }
     m.f[n0] = -fsum;
-    if (gather_springs) add_spring_forces(m, n0, n0 + 4);
+    if (gather_springs) add_spring_forces(m, b);
     const Mat3 sig = P * transpose(R);
     m.stress[b] = {sig(0, 0), sig(1, 1), sig(2, 2), sig(0, 1), sig(1, 2), sig(0, 2)};
     m.strain_energy[b] =
@@ -215,7 +215,7 @@ std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_sp
       std::fill(m.f.begin() + nb, m.f.begin() + ne, Vec3{});
       if (gs) {
 #pragma omp parallel for schedule(static)
-        for (std::int64_t n = nb; n < ne; ++n) add_spring_forces(m, n, n + 1);
+        for (std::int32_t b = g.begin; b < g.end; ++b) add_spring_forces(m, b);
       }
       continue;
     }

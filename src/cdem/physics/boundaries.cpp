@@ -44,7 +44,7 @@ Boundaries prepare_boundaries(const Model& m, const Case& c) {
     std::map<std::int32_t, Vec3> normals;
     for (const auto& f : set->facets) {
       Vec3 p[3];
-      for (int q = 0; q < f.count(); ++q) p[q] = m.X[f.nodes[q]];
+      for (int q = 0; q < f.count(); ++q) p[q] = m.X(f.nodes[q]);
       const Vec3 a = face_area_vector(std::span<const Vec3>(p, f.count()), f.count());
       for (int q = 0; q < f.count(); ++q) normals[f.nodes[q]] += a;
     }

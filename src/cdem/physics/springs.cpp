@@ -131,6 +131,7 @@ void spring_forces(Model& m, double dt, double t) {
     m.iface_normal_set = false;
   }
   const bool have_old = m.iface_normal_set;
+  const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < ni; ++i) {
     const std::int64_t s0 = i * np;
@@ -166,10 +167,7 @@ void spring_forces(Model& m, double dt, double t) {
     for (int q = 0; q < np; ++q) {
       const std::int64_t s = s0 + q;
       const std::uint8_t state = m.sp_state[s];
-      if (state == kReleased) {
-        m.sp_force[s] = {};
-        continue;
-      }
+      if (state == kReleased) continue;  // F_n = 0, F_s = 0 since it was released
       const auto a = m.sp_a[s], b = m.sp_b[s];
       const Vec3 d = pb[q] - pa[q];
       // Objective increment: remove the part of the relative motion that only carries the
@@ -196,21 +194,25 @@ void spring_forces(Model& m, double dt, double t) {
         if (holds) {
           m.sp_fn[s] = fn;
           m.sp_fs[s] = fs;
-          m.sp_force[s] = fn * n + fs;
           continue;
         }
       }
-      SpringPoint sp{kn,          ks,           area,          m.sp_fn[s],
-                     m.sp_fs[s],   m.sp_w[s],    m.sp_slip[s],  m.sp_dil[s],
-                     state,        m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
+      const double fn_old = m.sp_fn[s];
+      const Vec3 fs_old = m.sp_fs[s];
+      SpringPoint sp{kn,     ks,           area,    fn_old,
+                     fs_old, fe ? m.sp_w[s] : 0.0, fe ? m.sp_slip[s] : 0.0, fe ? m.sp_dil[s] : 0.0,
+                     state,  m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
       const double release = m.release_distance_factor * 0.5 *
                              (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
-      m.sp_force[s] = update_spring_point(sp, law, d, du, n, t, release, m.sp_force[s]);
+      // The force of the previous step, F_n n_old + F_s (spring_force with the normal then).
+      update_spring_point(sp, law, d, du, n, t, release, fn_old * n_old + fs_old);
       m.sp_fn[s] = sp.fn;
       m.sp_fs[s] = sp.fs;
-      m.sp_w[s] = sp.w;
-      m.sp_slip[s] = sp.slip;
-      m.sp_dil[s] = sp.dil;
+      if (fe) {
+        m.sp_w[s] = sp.w;
+        m.sp_slip[s] = sp.slip;
+        m.sp_dil[s] = sp.dil;
+      }
       m.sp_state[s] = sp.state;
       m.sp_mode[s] = sp.mode;
       m.sp_break_time[s] = sp.break_time;
@@ -221,9 +223,19 @@ void spring_forces(Model& m, double dt, double t) {
 }
 
 void gather_spring_forces(Model& m) {
-  const auto nn = static_cast<std::int64_t>(m.n_nodes());
+  const auto nb = static_cast<std::int32_t>(m.n_blocks());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t n = 0; n < nn; ++n) add_spring_forces(m, n, n + 1);
+  for (std::int32_t b = 0; b < nb; ++b) add_spring_forces(m, b);
+}
+
+void release_unused_spring_state(Model& m) {
+  for (const auto& law : m.spring_laws)
+    if (law.law == InterfaceLaw::FractureEnergy) return;
+  auto zero = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return x == 0.0; });
+  };
+  if (!zero(m.sp_w) || !zero(m.sp_slip) || !zero(m.sp_dil)) return;
+  for (auto* v : {&m.sp_w, &m.sp_slip, &m.sp_dil}) std::vector<double>().swap(*v);
 }
 
 }  // namespace cdem

@@ -50,28 +50,63 @@ struct SpringPoint {
 Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
                          double release_distance, Vec3 force_old);
 
-// All spring points: sp_force[s] = force on node a. Parallel over interfaces.
+// All spring points: sp_fn, sp_fs (the force on node a is spring_force). Parallel over
+// interfaces.
 void spring_forces(Model& m, double dt, double t);
 
-// Adds the spring forces to the nodes through the node -> spring list (fixed order: bitwise
-// identical sums for any thread count). Parallel over nodes.
+// The force of spring point s on its node a (node b gets minus it): F_n n + F_s, with n the
+// interface normal of the last spring_forces call.
+inline Vec3 spring_force(const Model& m, std::size_t s) {
+  return m.sp_fn[s] * m.iface_normal[s / static_cast<std::size_t>(m.springs_per_iface)] +
+         m.sp_fs[s];
+}
+
+// Adds the spring forces of block b's interfaces to its nodes: f[n] += (sum of the node's spring
+// forces, in ascending spring order). Each interface gives one spring point per face node, so the
+// sum of each node is in a fixed order: bitwise identical for any thread count. The block
+// kernels call it for their block right after assigning its forces (block_forces with
+// gather_springs), which saves a pass over f and a parallel region per step.
+inline void add_spring_forces(Model& m, std::int32_t b) {
+  const std::int32_t n0 = m.block_first_node[b];
+  const int nn = m.block_first_node[b + 1] - n0;
+  const int np = m.springs_per_iface;
+  Vec3 acc[4] = {};
+  for (auto k = m.block_iface_offset[b]; k < m.block_iface_offset[b + 1]; ++k) {
+    const std::int32_t e = m.block_iface_list[k];
+    const bool a_side = e > 0;
+    const std::int64_t s0 = static_cast<std::int64_t>((a_side ? e : -e) - 1) * np;
+    const Vec3 n = m.iface_normal[s0 / np];
+    const std::int32_t* node = (a_side ? m.sp_a.data() : m.sp_b.data()) + s0;
+    for (int q = 0; q < np; ++q) {
+      const Vec3 f = m.sp_fn[s0 + q] * n + m.sp_fs[s0 + q];
+      Vec3& a = acc[node[q] - n0];
+      if (a_side)
+        a += f;
+      else
+        a -= f;
+    }
+  }
+  for (int j = 0; j < nn; ++j) m.f[n0 + j] += acc[j];
+}
+
+// The same for every block, parallel over blocks (tests and benchmarks; the step fuses it into
+// the block kernels).
 void gather_spring_forces(Model& m);
 
-// The same for nodes [n0, n1): f[n] += (sum of its spring forces, in the list's order). The
-// block kernels call it for their own nodes right after assigning them (block_forces with
-// gather_springs), which saves a pass over f and a parallel region per step.
-inline void add_spring_forces(Model& m, std::int64_t n0, std::int64_t n1) {
-  for (std::int64_t n = n0; n < n1; ++n) {
-    Vec3 acc{};
-    for (auto k = m.node_sp_offset[n]; k < m.node_sp_offset[n + 1]; ++k) {
-      const auto e = m.node_sp_list[k];
-      if (e > 0)
-        acc += m.sp_force[e - 1];
-      else
-        acc -= m.sp_force[-e - 1];
-    }
-    m.f[n] += acc;
+// Calls fn(s) for every spring point at block b's nodes (its interfaces' spring points).
+template <class Fn>
+void for_each_block_spring(const Model& m, std::int32_t b, Fn&& fn) {
+  const int np = m.springs_per_iface;
+  for (auto k = m.block_iface_offset[b]; k < m.block_iface_offset[b + 1]; ++k) {
+    const std::int32_t e = m.block_iface_list[k];
+    const std::size_t s0 = static_cast<std::size_t>((e > 0 ? e : -e) - 1) * np;
+    for (int q = 0; q < np; ++q) fn(s0 + q);
   }
 }
+
+// Drops the fracture-energy state arrays (sp_w, sp_slip, sp_dil) when no interface law is the
+// fracture-energy law and they are all zero: the other laws never change them (Simulation calls
+// it; the kernels read them as 0 then).
+void release_unused_spring_state(Model& m);
 
 }  // namespace cdem

@@ -161,8 +161,8 @@ Case box_case(int dim, Vec3 extent, double h, InterfaceLaw law, int bars) {
 
 void apply_bench_state(Model& m, double h, double strain, double rotation, double jitter,
                        double speed, double speed_jitter, std::uint64_t seed) {
-  Vec3 lo = m.X[0], hi = m.X[0];
-  for (const auto& p : m.X)
+  Vec3 lo = m.X(0), hi = m.X(0);
+  for (const auto& p : m.X_nodes())
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::min(lo[d], p[d]);
       hi[d] = std::max(hi[d], p[d]);
@@ -172,7 +172,7 @@ void apply_bench_state(Model& m, double h, double strain, double rotation, doubl
   const std::uint64_t vbase = mix(seed) & 0xffffffffULL, nbase = mix(seed + 1) << 32;
   for (std::size_t n = 0; n < m.n_nodes(); ++n) {
     const auto vtx = static_cast<std::uint64_t>(m.node_vertex[n]);
-    const Vec3 r = m.X[n] - c;
+    const Vec3 r = m.X(n) - c;
     const Vec3 rot{cr * r.x - sr * r.y, sr * r.x + cr * r.y, r.z};
     m.x[n] = c + rot + (strain * h) * random_vec(vbase + 2 * vtx, m.dim) +
              jitter * random_vec(nbase + 2 * n, m.dim);
@@ -210,7 +210,7 @@ double mean_polar_iterations(const Model& m) {
 std::size_t model_bytes(const Model& m) {
   // Every std::vector member of Model (keep in step with model/model.hpp).
   std::size_t b = 0;
-  b += bytes_of(m.X) + bytes_of(m.x) + bytes_of(m.v) + bytes_of(m.f) + bytes_of(m.mass) +
+  b += bytes_of(m.vertex_X) + bytes_of(m.x) + bytes_of(m.v) + bytes_of(m.f) + bytes_of(m.mass) +
        bytes_of(m.inv_mass) + bytes_of(m.damping) + bytes_of(m.local_damping) +
        bytes_of(m.node_block.first) + bytes_of(m.node_vertex);
   b += bytes_of(m.groups) + bytes_of(m.block_type) + bytes_of(m.block_first_node) +
@@ -219,12 +219,11 @@ std::size_t model_bytes(const Model& m) {
        bytes_of(m.geom) + bytes_of(m.geom_offset) + bytes_of(m.stress) + bytes_of(m.stress0) +
        bytes_of(m.strain_energy) + bytes_of(m.vol_ratio);
   b += bytes_of(m.iface_block_a) + bytes_of(m.iface_block_b) + bytes_of(m.iface_material) +
-       bytes_of(m.iface_area0) + bytes_of(m.iface_normal) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area.v) +
+       bytes_of(m.iface_normal) + bytes_of(m.sp_a) + bytes_of(m.sp_b) + bytes_of(m.sp_area.v) +
        bytes_of(m.sp_kn.v) + bytes_of(m.sp_ks.v) + bytes_of(m.sp_fn) + bytes_of(m.sp_fs) +
        bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_g0) +
        bytes_of(m.sp_state) + bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) +
-       bytes_of(m.sp_dissipated) + bytes_of(m.sp_force) + bytes_of(m.node_sp_offset) +
-       bytes_of(m.node_sp_list);
+       bytes_of(m.sp_dissipated) + bytes_of(m.block_iface_offset) + bytes_of(m.block_iface_list);
   b += bytes_of(m.block_materials) + bytes_of(m.iface_materials) + bytes_of(m.spring_laws) +
        bytes_of(m.region_names) + bytes_of(m.facet_sets);
   for (const auto& s : m.facet_sets) b += bytes_of(s.facets);
@@ -243,9 +242,8 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
              size_of(m.strain_energy) + size_of(m.vol_ratio);
   // spring_forces: read the interface arrays, block sizes, node indices, x, v and the spring
   // constants. Spring state: the fast path (intact spring points under a linear law) reads
-  // state, F_s, k_n, k_s, A_c and writes F_n, F_s and the force; the full update (broken,
-  // fracture-energy) also reads F_n, w, slip, dilation, mode, break time, dissipation and the old
-  // force and writes them back. Their bytes count for the fraction of spring points that take it.
+  // state, F_s, k_n, k_s, A_c and writes F_n, F_s; the full update (broken, fracture-energy) also
+  // reads F_n, w, slip, dilation, mode, break time and dissipation and writes them back. Their bytes count for the fraction of spring points that take it.
   double slow = 0;
   for (std::size_t sp = 0; sp < m.n_springs(); ++sp)
     slow += m.sp_state[sp] != kIntact ||
@@ -257,14 +255,16 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks) {
               size_of(m.v) + size_of(m.sp_kn.v) + size_of(m.sp_ks.v) + size_of(m.sp_area.v) +
               size_of(m.sp_g0) + size_of(m.sp_state) + 2 * size_of(m.sp_fs) + size_of(m.sp_fn) +
               2 * size_of(m.iface_normal) +
-              size_of(m.sp_force) +
               slow_fraction *
-                  (size_of(m.sp_fn) + size_of(m.sp_force) + size_of(m.sp_state) +
+                  (size_of(m.sp_fn) + size_of(m.sp_state) +
                    2 * (size_of(m.sp_w) + size_of(m.sp_slip) + size_of(m.sp_dil) +
                         size_of(m.sp_mode) + size_of(m.sp_break_time) + size_of(m.sp_dissipated)));
-  // gather_spring_forces: read the CSR list and the spring forces; read and write f.
-  s.gather =
-      size_of(m.node_sp_offset) + size_of(m.node_sp_list) + size_of(m.sp_force) + 2 * size_of(m.f);
+  // The spring gather (inside block_forces): read the block -> interface CSR, the interface
+  // normals, the node indices and F_n, F_s of every spring point twice (once from each side);
+  // f is already in cache from the block kernel.
+  s.gather = size_of(m.block_iface_offset) + size_of(m.block_iface_list) +
+             2 * (size_of(m.iface_normal) + size_of(m.sp_fn) + size_of(m.sp_fs)) +
+             size_of(m.sp_a) + size_of(m.sp_b);
   // bar loads: per loaded block, read x of its 4 nodes, read and write f, and the AppliedLoads
   // record (node, force, old velocity) per node.
   s.loads = static_cast<double>(loaded_blocks) * 4.0 *

@@ -19,6 +19,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
   std::vector<double>().swap(m_.inv_mass);  // no kernel reads it (integrate uses mass)
+  release_unused_spring_state(m_);  // no fracture-energy law: sp_w, sp_slip, sp_dil dropped
   for (const auto& f : c.analysis.main_faces)
     if (!m_.facet_set(f))
       throw InputError(fmt::format("{}: key 'analysis.main_faces': no face set '{}' in the mesh", c.path, f));
@@ -100,7 +101,7 @@ void Simulation::setup_damping_zones(const Case& c) {
       const auto v = m_.node_vertex[n];
       if (in_vertex[v] && out_vertex[v] && !seen[v]) {
         seen[v] = 1;
-        edge.push_back(m_.X[n]);
+        edge.push_back(m_.X(n));
       }
     }
     std::vector<double> dist(m_.n_blocks(), 0.0);
@@ -109,7 +110,7 @@ void Simulation::setup_damping_zones(const Case& c) {
       if (!in_zone[b]) continue;
       Vec3 cen{};
       const auto n0 = m_.block_first_node[b], n1 = m_.block_first_node[b + 1];
-      for (auto n = n0; n < n1; ++n) cen += m_.X[n];
+      for (auto n = n0; n < n1; ++n) cen += m_.X(n);
       cen = cen / (n1 - n0);
       double d = edge.empty() ? 0.0 : std::numeric_limits<double>::infinity();
       for (const auto& p : edge) d = std::min(d, norm(cen - p));
@@ -138,7 +139,7 @@ void Simulation::setup_initial_stress(const Case& c) {
   for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
     Vec3 cen{};
     const auto n0 = m_.block_first_node[b], n1 = m_.block_first_node[b + 1];
-    for (auto n = n0; n < n1; ++n) cen += m_.X[n];
+    for (auto n = n0; n < n1; ++n) cen += m_.X(n);
     centroid[b] = cen / (n1 - n0);
     m_.stress0[b] = stress_at(centroid[b]);
     m_.stress[b] = m_.stress0[b];
@@ -151,7 +152,7 @@ void Simulation::setup_initial_stress(const Case& c) {
     Sym6 s;
     for (int k = 0; k < 6; ++k) s[k] = 0.5 * (sa[k] + sb[k]);
     Vec3 pa[3];
-    for (int q = 0; q < np; ++q) pa[q] = m_.X[m_.sp_a[i * np + q]];
+    for (int q = 0; q < np; ++q) pa[q] = m_.X(m_.sp_a[i * np + q]);
     Vec3 n{};
     if (np == 2) {
       const Vec3 t = pa[1] - pa[0];
@@ -167,7 +168,6 @@ void Simulation::setup_initial_stress(const Case& c) {
       m_.sp_fn[sp] = sn * m_.sp_area[sp];
       m_.sp_g0[sp] = m_.sp_fn[sp] / m_.sp_kn[sp];  // F_n = k_n A_c (d_n + g0) = F_n0 at d_n = 0
       m_.sp_fs[sp] = m_.sp_area[sp] * (tr - sn * n);
-      m_.sp_force[sp] = m_.sp_fn[sp] * n + m_.sp_fs[sp];
     }
   }
 }
@@ -219,7 +219,7 @@ EnergyBalance Simulation::energy() const {
     if (m_.sp_state[s] == kReleased) e.fracture += m_.sp_dissipated[s];
   for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
     e.damping += node_dissipated_[n];
-    e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X[n]);
+    e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n));
   }
   // The accumulated works include all of the last step, [t_n - dt/2, t_n + dt/2]; the state is
   // at t_n, so half of the last step's increment is taken back out (exact to O(dt^2) per step,

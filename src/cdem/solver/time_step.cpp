@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace cdem {
 
@@ -21,12 +22,14 @@ StableStep stable_time_step(const Model& m, double safety) {
       s.block = static_cast<std::int64_t>(b);
     }
   }
+  // Spring stiffness at each node, summed in ascending spring order.
+  std::vector<double> k_node(m.n_nodes(), 0.0);
+  for (std::size_t sp = 0; sp < m.n_springs(); ++sp) {
+    k_node[m.sp_a[sp]] += m.sp_kn[sp];
+    k_node[m.sp_b[sp]] += m.sp_kn[sp];
+  }
   for (std::size_t n = 0; n < m.n_nodes(); ++n) {
-    double k = 0;
-    for (auto q = m.node_sp_offset[n]; q < m.node_sp_offset[n + 1]; ++q) {
-      const auto e = m.node_sp_list[q];
-      k += m.sp_kn[(e > 0 ? e : -e) - 1];
-    }
+    const double k = k_node[n];
     if (k <= 0) continue;
     const double d = std::sqrt(2.0 * m.mass[n] / k);
     if (d < s.dt_spring) {

@@ -116,8 +116,8 @@ void BM_Integrate(benchmark::State& state) {
   block_forces(m, nullptr);
   release_zero_damping(m);  // as Simulation does: the bench rock is undamped
   const double dt = bench_models::stable_dt(m);
-  std::vector<double> dissipated(m.n_nodes(), 0.0);
-  for (auto _ : state) integrate(m, Vec3{0, 0, -9.81}, dt, dissipated, nullptr);
+  std::vector<double> dissipated(m.n_blocks(), 0.0);
+  for (auto _ : state) integrate(m, Vec3{0, 0, -9.81}, dt, dissipated.data(), nullptr);
   finish(state, static_cast<std::int64_t>(m.n_blocks()), m.n_blocks());
 }
 

@@ -183,7 +183,7 @@ std::map<std::int32_t, std::pair<Vec3, double>> forces_by_block(const Model& m,
                                                                 const AppliedLoads& out) {
   std::map<std::int32_t, std::pair<Vec3, double>> r;
   for (std::size_t i = 0; i < out.node.size(); ++i) {
-    auto& e = r[m.node_block[out.node[i]]];
+    auto& e = r[m.node_block(out.node[i])];
     e.first += out.force[i];
     e.second = std::max(e.second, norm(out.force[i]));
   }
@@ -197,7 +197,7 @@ void check_net_force_zero(Model& m, const Case& c) {
   std::mt19937 gen(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (std::size_t n = 0; n < m.n_nodes(); ++n)
-    for (int d = 0; d < m.dim; ++d) m.x[n][d] += 0.01 * u(gen) * m.block_size[m.node_block[n]];
+    for (int d = 0; d < m.dim; ++d) m.x[n][d] += 0.01 * u(gen) * m.block_size[m.node_block(n)];
   BarCharges bc = build_bar_charges(m, c);
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);  // long after ignition: xi = 1 everywhere
@@ -210,7 +210,7 @@ void check_net_force_zero(Model& m, const Case& c) {
     EXPECT_GT(fmax, 0.0);
     EXPECT_LE(norm(sum), 1e-12 * fmax) << "block " << b;
     int nodes = 0;
-    for (auto n : out.node) nodes += m.node_block[n] == b;
+    for (auto n : out.node) nodes += m.node_block(n) == b;
     EXPECT_EQ(nodes, nodes_of(m.block_type[b]));
   }
 }

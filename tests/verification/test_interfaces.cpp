@@ -290,7 +290,7 @@ TwoBody two_body(int dim, const InterfaceMaterial& law) {
   tb.m = build_model(mesh, {mat_low, mat_up}, {between, glue}, "two-body test");
   tb.normal = dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1};
   for (std::size_t n = 0; n < tb.m.n_nodes(); ++n)
-    if (tb.m.region_names[tb.m.block_region[tb.m.node_block[n]]] == "up")
+    if (tb.m.region_names[tb.m.block_region[tb.m.node_block(n)]] == "up")
       tb.upper_nodes.push_back(static_cast<std::int32_t>(n));
   for (std::size_t s = 0; s < tb.m.n_springs(); ++s)
     if (tb.m.iface_material[s / tb.m.springs_per_iface] == 0) {

@@ -198,7 +198,7 @@ TEST(SolidCharge, PressureFromCurrentBlockVolume) {
   // Nodes of the stretched block: p (s/2) (n1 + n2), magnitude p s / sqrt(2) with s = 1.1 x 0.05.
   int n_checked = 0;
   for (std::size_t k = 0; k < out.node.size(); ++k) {
-    if (m.node_block[out.node[k]] != b) continue;
+    if (m.node_block(out.node[k]) != b) continue;
     ++n_checked;
     EXPECT_NEAR(norm(out.force[k]), sc.p[2] * 0.055 / std::sqrt(2.0), 1e-12 * sc.p[2]);
     EXPECT_NEAR(dot(normalized(out.force[k]), normalized(m.x[out.node[k]] - cen)), 1.0, 1e-12);
@@ -225,7 +225,7 @@ TEST(SolidCharge, InvertedBlockIsReportedAndCarriesNoPressure) {
     EXPECT_EQ(sc.dead_count, 1) << "pass " << pass;
     EXPECT_EQ(sc.p[3], 0.0);
     for (int k = 0; k < 6; ++k) EXPECT_EQ(m.stress[b][k], 0.0);
-    for (auto n : out.node) EXPECT_NE(m.node_block[n], b) << "force on the dead block";
+    for (auto n : out.node) EXPECT_NE(m.node_block(n), b) << "force on the dead block";
     // It is let go: every spring point at its nodes is released (no force, no contact).
     for (auto n = n0; n < m.block_first_node[b + 1]; ++n)
       for (std::size_t sp = 0; sp < m.n_springs(); ++sp)

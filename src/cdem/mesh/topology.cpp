@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numeric>
 
@@ -132,19 +133,21 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
     m.block_region[b] = mesh.elem_region[e];
     m.block_material[b] = region_mat[mesh.elem_region[e]];
     m.block_elem_tag[b] = static_cast<std::size_t>(e) < mesh.elem_tag.size() ? mesh.elem_tag[e] : static_cast<std::int64_t>(e + 1);
-    m.geom_offset[b] = ng;
+    m.geom_offset[b] = static_cast<std::int32_t>(ng);
     ng += t == ElemType::Tri3 ? 4 : (t == ElemType::Quad4 ? 36 : 9);
     if (b == 0 || t != m.block_type[b - 1] || kind_of(e) != kind_of(order[b - 1]))
       m.groups.push_back({t, kind_of(e), static_cast<std::int32_t>(b), 0});
     m.groups.back().end = static_cast<std::int32_t>(b + 1);
   }
   m.block_first_node[ne] = nn;
-  m.geom_offset[ne] = ng;
+  if (ng > std::numeric_limits<std::int32_t>::max())
+    throw MeshError(fmt::format("{}: {} elements are too many (the reference geometry needs more "
+                                "than 2^31 numbers)", where, ne));
+  m.geom_offset[ne] = static_cast<std::int32_t>(ng);
   m.geom.assign(static_cast<std::size_t>(ng), 0.0);
 
   // ---- split nodes, reference geometry, lumped masses ----
   m.vertex_X = mesh.vertices;
-  m.node_block.first = m.block_first_node;
   m.node_vertex.resize(nn);
   m.mass.assign(nn, 0.0);
   m.damping.assign(nn, 0.0);

@@ -22,17 +22,6 @@ namespace cdem {
 // A spring-point quantity that is the same for every spring point of an interface (SPEC 1.3:
 // the np spring points of an interface share A_c = A / np and k A_c): stored once per interface
 // in `v`, read per spring point s as v[s / per] (per = springs_per_iface).
-// node -> block without a per-node array: the blocks' first nodes (a copy of block_first_node,
-// 4 B per block instead of 4 B per node), read as node_block[n] by a binary search (set-up,
-// messages and tests only; no kernel reads it).
-struct NodeBlockIndex {
-  std::vector<std::int32_t> first;  // size n_blocks + 1
-  std::int32_t operator[](std::size_t n) const {
-    const auto it = std::upper_bound(first.begin(), first.end(), static_cast<std::int32_t>(n));
-    return static_cast<std::int32_t>(it - first.begin()) - 1;
-  }
-};
-
 struct IfaceShared {
   std::vector<double> v;  // per interface
   std::int32_t per = 1;   // spring points per interface
@@ -73,7 +62,13 @@ struct Model {
   std::vector<double> damping;        // mass-proportional damping coefficient (1/s); empty: 0
                                       // everywhere (see release_zero_damping, integrate.hpp)
   std::vector<double> local_damping;  // alpha_L; empty: 0 everywhere
-  NodeBlockIndex node_block;           // block of node n: node_block[n]
+  // The block of node n: a binary search over block_first_node (set-up, messages and tests
+  // only; no kernel calls it).
+  std::int32_t node_block(std::size_t n) const {
+    const auto it = std::upper_bound(block_first_node.begin(), block_first_node.end(),
+                                     static_cast<std::int32_t>(n));
+    return static_cast<std::int32_t>(it - block_first_node.begin()) - 1;
+  }
   std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
 
   // ---- blocks ----
@@ -91,7 +86,7 @@ struct Model {
   //   quad: 4 Gauss points x (weight*detJ, 4 nodes x dN/dX, dN/dY) = 4 x 9 doubles
   //   tet: 9 doubles, the 3x3 inverse of Dm = [X1-X0, X2-X0, X3-X0] (row-major)
   std::vector<double> geom;
-  std::vector<std::int64_t> geom_offset;       // size n_blocks + 1
+  std::vector<std::int32_t> geom_offset;       // size n_blocks + 1
   std::vector<Sym6> stress;                    // Cauchy stress (Pa), for output and monitors
   std::vector<Sym6> stress0;                   // initial (in-situ) stress in the block frame;
                                                // empty: zero (Simulation releases it then)

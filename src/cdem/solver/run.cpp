@@ -36,7 +36,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 std::string describe_node(const Model& m, std::size_t n) {
-  const auto b = m.node_block[n];
+  const auto b = m.node_block(n);
   const Vec3 p = m.X(n);
   return fmt::format("block {} (element {} of region '{}') at ({:.4g}, {:.4g}, {:.4g})", b,
                      m.block_elem_tag[b], m.region_names[m.block_region[b]], p.x, p.y, p.z);

@@ -45,12 +45,17 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   }
   if (!(dt_ > 0) || !std::isfinite(dt_))
     throw InputError(fmt::format("{}: no finite stable time step (a model without blocks?)", c.path));
-  node_dissipated_.assign(m_.n_nodes(), 0.0);
-  ke_.assign(m_.n_nodes(), 0.0);
+  // Per block (integrate.hpp); the dissipation and c ke only for a damped model.
+  const bool damped = !m_.damping.empty() || !m_.local_damping.empty();
+  if (damped) block_dissipated_.assign(m_.n_blocks(), 0.0);
+  if (!m_.damping.empty()) cke_.assign(m_.n_blocks(), 0.0);
+  ke_.assign(m_.n_blocks(), 0.0);
   // Forces at t = 0 (block stresses for output before the first step).
   block_forces(m_, nullptr);
   // An initial velocity field counts as initial (kinetic) energy.
-  for (std::size_t n = 0; n < m_.n_nodes(); ++n) ke_[n] = 0.5 * m_.mass[n] * dot(m_.v[n], m_.v[n]);
+  for (std::size_t b = 0; b < m_.n_blocks(); ++b)
+    for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n)
+      ke_[b] += 0.5 * m_.mass[n] * dot(m_.v[n], m_.v[n]);
   e_initial_ = energy().mechanical();
 }
 
@@ -188,7 +193,8 @@ void Simulation::step(bool sample) {
   // 6. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
   // 7. integration with gravity and damping
-  integrate(m_, bc_.gravity, dt_, node_dissipated_, sample ? ke_.data() : nullptr);
+  integrate(m_, bc_.gravity, dt_, block_dissipated_.data(), sample ? ke_.data() : nullptr,
+            cke_.empty() ? nullptr : cke_.data());
   // 8. velocity constraints (prescribed at the mid-step time)
   // Works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt: they run half a step ahead of the
   // state at t_n (energy() takes the second half back out, see last_*_).
@@ -205,6 +211,16 @@ void Simulation::step(bool sample) {
   ++steps_;
 }
 
+std::size_t Simulation::solver_bytes() const {
+  auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  std::size_t b = bytes(block_dissipated_) + bytes(ke_) + bytes(cke_) + bytes(applied_.node) +
+                  bytes(applied_.force) + bytes(applied_.v_old);
+  b += bytes(bc_.constraints) + bytes(bc_.loads) + bytes(bc_.tables) + bytes(bc_.work_nodes) +
+       bytes(bc_.v_old) + bytes(bc_.f_load) + bytes(bc_.f_dash) + bytes(bc_.node_load_offset) +
+       bytes(bc_.node_load_entry) + bytes(bc_.load_force);
+  return b;
+}
+
 EnergyBalance Simulation::energy() const {
   EnergyBalance e;
   for (double k : ke_) e.kinetic += k;
@@ -217,16 +233,16 @@ EnergyBalance Simulation::energy() const {
   }
   for (std::size_t s = 0; s < m_.n_springs(); ++s)
     if (m_.sp_state[s] == kReleased) e.fracture += m_.sp_dissipated[s];
+  for (double d : block_dissipated_) e.damping += d;
   for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
-    e.damping += node_dissipated_[n];
     e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n));
   }
   // The accumulated works include all of the last step, [t_n - dt/2, t_n + dt/2]; the state is
   // at t_n, so half of the last step's increment is taken back out (exact to O(dt^2) per step,
   // not accumulated). Viscous damping of the last step: c m |v_mid|^2 dt = 2 c ke dt.
   double last_damping = 0;
-  if (steps_ > 0 && !m_.damping.empty())
-    for (std::size_t n = 0; n < m_.n_nodes(); ++n) last_damping += 2.0 * m_.damping[n] * ke_[n] * dt_;
+  if (steps_ > 0)
+    for (double ck : cke_) last_damping += 2.0 * ck * dt_;
   e.damping += w_absorbed_ - 0.5 * (last_absorbed_ + last_damping);
   e.external_work = w_boundary_ - 0.5 * last_boundary_;
   e.explosive_work = w_explosive_ - 0.5 * last_explosive_;

@@ -71,6 +71,10 @@ class Simulation {
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
   EnergyBalance energy() const;
 
+  // Bytes of the solver's own arrays (per-block energies, boundary-condition arrays), beyond the
+  // Model's.
+  std::size_t solver_bytes() const;
+
   void add_load(LoadHook hook) { loads_.push_back(std::move(hook)); }
   // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it. With a
   // fixed time step (simulation.dt) above dt_max, throws InputError naming the key.
@@ -91,7 +95,7 @@ class Simulation {
   std::int64_t steps_ = 0;
   std::int64_t inverted_ = 0;
   std::int32_t first_inverted_ = -1;
-  std::vector<double> node_dissipated_, ke_;
+  std::vector<double> block_dissipated_, ke_, cke_;  // per block (integrate.hpp)
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
   double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;  // increments of the last step
 };

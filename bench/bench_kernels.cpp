@@ -70,9 +70,10 @@ void BM_BlockForcesQuad(benchmark::State& state) {
 // jitter_dt: spring points opened/closed by up to this fraction of the tensile opening per node
 // and direction; broken: every spring point starts broken (contact and friction only). The
 // spring state is restored before every iteration (untimed), so each iteration does the same
-// work.
+// work. reference: the one-spring-point-at-a-time form (spring_forces_reference) instead of the
+// vectorised kernel, for the ratio of the two in the same run.
 void BM_SpringForces(benchmark::State& state, Shape shape, InterfaceLaw law, double jitter_dt,
-                     bool broken) {
+                     bool broken, bool reference = false) {
   Model m = bench_models::state_model(shape, law, jitter_dt, 0.05);
   if (broken)
     for (std::size_t s = 0; s < m.n_springs(); ++s) {
@@ -85,7 +86,10 @@ void BM_SpringForces(benchmark::State& state, Shape shape, InterfaceLaw law, dou
     state.PauseTiming();
     saved.restore(m);
     state.ResumeTiming();
-    spring_forces(m, dt, 1e-3);
+    if (reference)
+      spring_forces_reference(m, dt, 1e-3);
+    else
+      spring_forces(m, dt, 1e-3);
   }
   finish(state, static_cast<std::int64_t>(m.n_springs()), m.n_blocks());
   // The mix of law branches the iterations went through.
@@ -194,6 +198,14 @@ BENCHMARK_CAPTURE(BM_SpringForces, tet_fracture_energy, Shape::Tet, InterfaceLaw
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_SpringForces, tet_broken_contact, Shape::Tet, InterfaceLaw::MohrCoulomb, 1.0,
                   true)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SpringForces, tet_mohr_coulomb_intact_reference, Shape::Tet,
+                  InterfaceLaw::MohrCoulomb, 0.2, false, true)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_SpringForces, tet_broken_contact_reference, Shape::Tet,
+                  InterfaceLaw::MohrCoulomb, 1.0, true, true)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_SpringForces, tri_mohr_coulomb_intact, Shape::Tri, InterfaceLaw::MohrCoulomb,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "cdem/mesh/element_geometry.hpp"
 
@@ -95,11 +96,12 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
                          double release_distance, Vec3 force_old) {
   if (sp.state == kReleased) return {};
   const double e_old = elastic_energy(sp);
-  // Keep the shear force in the current tangent plane, preserving its magnitude.
-  const double fs_old = norm(sp.fs);
+  // Keep the shear force in the current tangent plane, preserving its magnitude:
+  // |F_s| / |F_s,proj| as one square root of the ratio of the squares (as spring_forces).
+  const double fs_old2 = dot(sp.fs, sp.fs);
   sp.fs -= dot(sp.fs, n) * n;
-  const double fs_proj = norm(sp.fs);
-  if (fs_proj > 0) sp.fs *= fs_old / fs_proj;
+  const double fs_proj2 = dot(sp.fs, sp.fs);
+  if (fs_proj2 > 0) sp.fs *= std::sqrt(fs_old2 / fs_proj2);
   const double du_n = dot(du, n);
   sp.fs += sp.ks * (du - du_n * n);
   const double dn = dot(d, n) + sp.g0;
@@ -123,13 +125,40 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
   return force;
 }
 
-void spring_forces(Model& m, double dt, double t) {
+namespace {
+
+// The full update of spring point s (interface i) with the dissipation book-keeping: breaking,
+// broken contact and friction, softening (fracture-energy law), release.
+void spring_full_update(Model& m, const SpringLaw& law, std::int64_t i, std::int64_t s, Vec3 d,
+                        Vec3 du, Vec3 n, Vec3 n_old, double off, double t, bool fe) {
+  const double kn = m.sp_kn.v[i], ks = m.sp_ks.v[i], area = m.sp_area.v[i];
+  const double fn_old = m.sp_fn[s];
+  const Vec3 fs_old = m.sp_fs[s];
+  SpringPoint sp{kn,     ks,           area,    fn_old,
+                 fs_old, fe ? m.sp_w[s] : 0.0, fe ? m.sp_slip[s] : 0.0, fe ? m.sp_dil[s] : 0.0,
+                 m.sp_state[s], m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
+  const double release = m.release_distance_factor * 0.5 *
+                         (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+  // The force of the previous step, F_n n_old + F_s (spring_force with the normal then).
+  update_spring_point(sp, law, d, du, n, t, release, fn_old * n_old + fs_old);
+  m.sp_fn[s] = sp.fn;
+  m.sp_fs[s] = sp.fs;
+  if (fe) {
+    m.sp_w[s] = sp.w;
+    m.sp_slip[s] = sp.slip;
+    m.sp_dil[s] = sp.dil;
+  }
+  m.sp_state[s] = sp.state;
+  m.sp_mode[s] = sp.mode;
+  m.sp_break_time[s] = sp.break_time;
+  m.sp_dissipated[s] = sp.dissipated;
+}
+
+// The reference form, one interface at a time: the first call (no previous normal kept) and
+// any spring_points_per_iface other than 2 or 3.
+void spring_forces_generic(Model& m, double dt, double t) {
   const int np = m.springs_per_iface;
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
-  if (m.iface_normal.size() != m.n_ifaces()) {
-    m.iface_normal.assign(m.n_ifaces(), Vec3{});
-    m.iface_normal_set = false;
-  }
   const bool have_old = m.iface_normal_set;
   const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
 #pragma omp parallel for schedule(static)
@@ -197,29 +226,270 @@ void spring_forces(Model& m, double dt, double t) {
           continue;
         }
       }
-      const double fn_old = m.sp_fn[s];
-      const Vec3 fs_old = m.sp_fs[s];
-      SpringPoint sp{kn,     ks,           area,    fn_old,
-                     fs_old, fe ? m.sp_w[s] : 0.0, fe ? m.sp_slip[s] : 0.0, fe ? m.sp_dil[s] : 0.0,
-                     state,  m.sp_mode[s], m.sp_break_time[s], m.sp_dissipated[s], off};
-      const double release = m.release_distance_factor * 0.5 *
-                             (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
-      // The force of the previous step, F_n n_old + F_s (spring_force with the normal then).
-      update_spring_point(sp, law, d, du, n, t, release, fn_old * n_old + fs_old);
-      m.sp_fn[s] = sp.fn;
-      m.sp_fs[s] = sp.fs;
-      if (fe) {
-        m.sp_w[s] = sp.w;
-        m.sp_slip[s] = sp.slip;
-        m.sp_dil[s] = sp.dil;
-      }
-      m.sp_state[s] = sp.state;
-      m.sp_mode[s] = sp.mode;
-      m.sp_break_time[s] = sp.break_time;
-      m.sp_dissipated[s] = sp.dissipated;
+      spring_full_update(m, law, i, s, d, du, n, n_old, off, t, fe);
     }
   }
   m.iface_normal_set = true;
+}
+
+// Interfaces per chunk of the vectorised kernel. GCC 12 picks the vector width from the largest
+// trip count the loop can have: 32 interfaces (96 spring points) let it use 64-byte vectors for
+// the spring loop (8 interfaces gave 16-byte ones). The stack arrays take ~10 KB.
+constexpr int kChunk = 32;
+
+// The same arithmetic as spring_forces_generic (every expression in the same order, so the
+// results are bitwise the same), organised for SIMD over a chunk of kChunk interfaces:
+//  1. per interface (one SIMD lane each): gather the face nodes, the new normal, the spin
+//     n - n_old, the spring constants and the law's parameters into stack arrays;
+//  2. per spring point of the chunk (contiguous s): the fast path of an intact spring point
+//     under a linear law, as masked stores; a flag for the others (breaking now, broken,
+//     fracture-energy law);
+//  3. the flagged ones, one at a time, through the full update.
+// The law of each interface is read per lane.
+template <int NP, bool kG0>
+void spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe) {
+  // Per interface (index l) the previous normal; per spring point of the chunk (index k = l NP + q,
+  // the interface's values repeated NP times, so that the spring loop reads them contiguously)
+  // the normal, the spin, the constants and the law's parameters.
+  constexpr int K = kChunk * NP;
+  alignas(64) double ox[kChunk], oy[kChunk], oz[kChunk];
+  alignas(64) double nx[K], ny[K], nz[K], ex[K], ey[K], ez[K];
+  alignas(64) double kn_l[K], ks_l[K], area_l[K], ft_l[K], c_l[K], tphi_l[K];
+  alignas(64) int kind_l[K];  // 0 elastic, 1 Mohr-Coulomb, 2 fracture energy
+  alignas(64) int slow[K], keep[K];
+  alignas(64) double fsx0[K], fsy0[K], fsz0[K];
+  alignas(64) double dx[K], dy[K], dz[K], dvx[K], dvy[K], dvz[K];  // x_b - x_a, v_b - v_a
+  alignas(64) double onx[K], ony[K], onz[K], rel_l[K], tphir_l[K];  // for broken spring points
+  // Component loads and stores (an aggregate Vec3 copy is not vectorised by GCC 12).
+  const double* x = reinterpret_cast<const double*>(m.x.data());
+  const double* v = reinterpret_cast<const double*>(m.v.data());
+  const std::int32_t* sa = m.sp_a.data();
+  const std::int32_t* sb = m.sp_b.data();
+  const SpringLaw* laws = m.spring_laws.data();
+  const std::int32_t* mat = m.iface_material.data();
+  double* normal = reinterpret_cast<double*>(m.iface_normal.data());
+#pragma omp simd
+  for (int l = 0; l < w; ++l) {
+    const std::int64_t i = i0 + l, s0 = i * NP;
+    // The face nodes' positions and velocities (the only gathers of the kernel): d = x_b - x_a
+    // and dv = v_b - v_a per spring point, kept for the spring loop.
+    double pax[NP], pay[NP], paz[NP], pbx[NP], pby[NP], pbz[NP];
+    for (int q = 0; q < NP; ++q) {
+      const std::int64_t a = 3 * sa[s0 + q], b = 3 * sb[s0 + q];
+      pax[q] = x[a]; pay[q] = x[a + 1]; paz[q] = x[a + 2];
+      pbx[q] = x[b]; pby[q] = x[b + 1]; pbz[q] = x[b + 2];
+      const int k = l * NP + q;
+      dx[k] = pbx[q] - pax[q];
+      dy[k] = pby[q] - pay[q];
+      dz[k] = pbz[q] - paz[q];
+      dvx[k] = v[b] - v[a];
+      dvy[k] = v[b + 1] - v[a + 1];
+      dvz[k] = v[b + 2] - v[a + 2];
+    }
+    double sx, sy, sz;
+    if constexpr (NP == 3) {
+      // 0.5 cross(p1 - p0, p2 - p0) of each face
+      const double ax1 = pax[1] - pax[0], ay1 = pay[1] - pay[0], az1 = paz[1] - paz[0];
+      const double ax2 = pax[2] - pax[0], ay2 = pay[2] - pay[0], az2 = paz[2] - paz[0];
+      const double bx1 = pbx[1] - pbx[0], by1 = pby[1] - pby[0], bz1 = pbz[1] - pbz[0];
+      const double bx2 = pbx[2] - pbx[0], by2 = pby[2] - pby[0], bz2 = pbz[2] - pbz[0];
+      sx = 0.5 * (ay1 * az2 - az1 * ay2) + 0.5 * (by1 * bz2 - bz1 * by2);
+      sy = 0.5 * (az1 * ax2 - ax1 * az2) + 0.5 * (bz1 * bx2 - bx1 * bz2);
+      sz = 0.5 * (ax1 * ay2 - ay1 * ax2) + 0.5 * (bx1 * by2 - by1 * bx2);
+    } else {
+      const double tax = pax[1] - pax[0], tay = pay[1] - pay[0];
+      const double tbx = pbx[1] - pbx[0], tby = pby[1] - pby[0];
+      sx = tay + tby;
+      sy = -tax + -tbx;
+      sz = 0.0 + 0.0;
+    }
+    // unit(sum): (1 / |sum|) sum, 0 for sum = 0
+    const double n2 = sx * sx + sy * sy + sz * sz;
+    const double r = 1.0 / std::sqrt(n2);
+    const double nxl = n2 > 0 ? r * sx : 0.0, nyl = n2 > 0 ? r * sy : 0.0,
+                 nzl = n2 > 0 ? r * sz : 0.0;
+    const double oxl = normal[3 * i], oyl = normal[3 * i + 1], ozl = normal[3 * i + 2];
+    normal[3 * i] = nxl;
+    normal[3 * i + 1] = nyl;
+    normal[3 * i + 2] = nzl;
+    const double e0x = nxl - oxl, e0y = nyl - oyl, e0z = nzl - ozl;
+    const bool flip = e0x * e0x + e0y * e0y + e0z * e0z > 0.01;  // no spin correction
+    ox[l] = oxl; oy[l] = oyl; oz[l] = ozl;
+    const double exl = flip ? 0.0 : e0x, eyl = flip ? 0.0 : e0y, ezl = flip ? 0.0 : e0z;
+    const double knl = m.sp_kn.v[i], ksl = m.sp_ks.v[i], al = m.sp_area.v[i];
+    const SpringLaw& law = laws[mat[i]];
+    const double ftl = law.ft, cl = law.c, tpl = law.tan_phi, tprl = law.tan_phi_r;
+    const double rel = m.release_distance_factor * 0.5 *
+                       (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+    const int kl = static_cast<int>(law.law);
+    for (int q = 0; q < NP; ++q) {
+      const int k = l * NP + q;
+      nx[k] = nxl; ny[k] = nyl; nz[k] = nzl;
+      ex[k] = exl; ey[k] = eyl; ez[k] = ezl;
+      kn_l[k] = knl; ks_l[k] = ksl; area_l[k] = al;
+      ft_l[k] = ftl; c_l[k] = cl; tphi_l[k] = tpl;
+      kind_l[k] = kl;
+      onx[k] = oxl; ony[k] = oyl; onz[k] = ozl;
+      rel_l[k] = rel; tphir_l[k] = tprl;
+    }
+  }
+  const double* g0 = kG0 ? m.sp_g0.data() : nullptr;
+  double* fn_out = m.sp_fn.data();
+  double* diss_io = m.sp_dissipated.data();
+  double* fs_io = reinterpret_cast<double*>(m.sp_fs.data());
+  const std::uint8_t* state_in = m.sp_state.data();
+  const std::int64_t s_begin = i0 * NP;
+  // The spring loop, with or without the broken-contact path: its square roots and divisions
+  // cost about as much as the rest, so chunks without a broken spring point (most: cracks are
+  // local) skip it.
+  auto spring_loop = [&](auto with_broken) {
+  constexpr bool kBroken = decltype(with_broken)::value;
+#pragma omp simd
+  for (int k = 0; k < w * NP; ++k) {
+    const std::int64_t s = s_begin + k;
+    const int state = state_in[s];
+    const double n_x = nx[k], n_y = ny[k], n_z = nz[k];
+    const double dn = dx[k] * n_x + dy[k] * n_y + dz[k] * n_z;
+    // du = dt (v_b - v_a) - (d . n) e
+    const double dux = dt * dvx[k] - dn * ex[k];
+    const double duy = dt * dvy[k] - dn * ey[k];
+    const double duz = dt * dvz[k] - dn * ez[k];
+    double off = 0.0;
+    if constexpr (kG0) off = g0[s];
+    const double fx0 = fs_io[3 * s], fy0 = fs_io[3 * s + 1], fz0 = fs_io[3 * s + 2];
+    double fx = fx0, fy = fy0, fz = fz0;
+    const double fs_old2 = fx * fx + fy * fy + fz * fz;
+    const double fsn = fx * n_x + fy * n_y + fz * n_z;
+    fx -= fsn * n_x;
+    fy -= fsn * n_y;
+    fz -= fsn * n_z;
+    const double fs_proj2 = fx * fx + fy * fy + fz * fz;
+    const double scale = std::sqrt(fs_old2 / fs_proj2);
+    if (fs_proj2 > 0) {
+      fx *= scale;
+      fy *= scale;
+      fz *= scale;
+    }
+    const double dun = dux * n_x + duy * n_y + duz * n_z;
+    const double ks = ks_l[k];
+    fx += ks * (dux - dun * n_x);
+    fy += ks * (duy - dun * n_y);
+    fz += ks * (duz - dun * n_z);
+    const double fn = kn_l[k] * (dn + off);
+    const double tau = c_l[k] * area_l[k] - fn * tphi_l[k];
+    const int kind = kind_l[k];
+    // Non-short-circuit & and |: a && would put the loads behind branches (no vectorisation).
+    const bool holds =
+        (kind == static_cast<int>(InterfaceLaw::Elastic)) |
+        ((fn < ft_l[k] * area_l[k]) & (tau > 0) & (fx * fx + fy * fy + fz * fz < tau * tau));
+    const bool fast = (state == kIntact) &
+                      (kind != static_cast<int>(InterfaceLaw::FractureEnergy)) & holds;
+    bool broken = false;
+    double fnb = 0, bsc = 1, diss = 0;
+    if constexpr (kBroken) {
+      // A broken spring point that stays within the release distance: contact and Coulomb
+      // friction (broken_law) with the dissipation book-keeping of update_spring_point, the same
+      // expressions in the same order.
+      const double kn = kn_l[k];
+      fnb = std::min(0.0, kn * (dn + off));
+      const double cap = -fnb * tphir_l[k];
+      const double mag = std::sqrt(fx * fx + fy * fy + fz * fz);
+      const double capf = cap > 0 ? cap / mag : 0.0;
+      // F_s scaled down to the cap (x 1.0 is exact where it is not over it): the factor, not the
+      // value, is selected, so that GCC keeps the stores below unconditional.
+      bsc = mag > cap ? capf : 1.0;
+      const double bx = fx * bsc, by = fy * bsc, bz = fz * bsc;
+      broken = (state == kBroken) &
+                          !(std::sqrt(dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k]) > rel_l[k]);
+      const double fn_old = fn_out[s];
+      const double e_old = 0.5 * fn_old * fn_old / kn + 0.5 * fs_old2 / ks;
+      const double fox = fn_old * onx[k] + fx0, foy = fn_old * ony[k] + fy0,
+                   foz = fn_old * onz[k] + fz0;
+      const double Fx = fnb * n_x + bx, Fy = fnb * n_y + by, Fz = fnb * n_z + bz;
+      const double e_new = 0.5 * fnb * fnb / kn + 0.5 * (bx * bx + by * by + bz * bz) / ks;
+      diss =
+          diss_io[s] +
+          (0.5 * ((fox + Fx) * dux + (foy + Fy) * duy + (foz + Fz) * duz) - (e_new - e_old));
+    }
+    // F_s is stored unconditionally (GCC 12 has no masked stores for the interleaved x, y, z;
+    // a select of the old value is turned back into one): the old value is kept on the stack
+    // and put back below where neither path applies.
+    if (fast | broken) fn_out[s] = fast ? fn : fnb;
+    if constexpr (kBroken) {
+      if (broken) diss_io[s] = diss;
+    }
+    const double store_sc = broken ? bsc : 1.0;
+    fs_io[3 * s] = fx * store_sc;
+    fs_io[3 * s + 1] = fy * store_sc;
+    fs_io[3 * s + 2] = fz * store_sc;
+    fsx0[k] = fx0;
+    fsy0[k] = fy0;
+    fsz0[k] = fz0;
+    const bool done = fast | broken;
+    keep[k] = !done;
+    slow[k] = (!done) & (state != kReleased);
+  }
+  };
+  bool any_broken = false;
+  for (int k = 0; k < w * NP; ++k) any_broken |= state_in[s_begin + k] == kBroken;
+  if (any_broken)
+    spring_loop(std::true_type{});
+  else
+    spring_loop(std::false_type{});
+  // (Counted here: a simd reduction in the loop above made GCC 12 leave that loop scalar.)
+  int n_keep = 0;  // spring points neither vector path takes
+  for (int k = 0; k < w * NP; ++k) n_keep += keep[k];
+  if (n_keep == 0) return;
+  for (int k = 0; k < w * NP; ++k)
+    if (keep[k]) m.sp_fs[s_begin + k] = Vec3{fsx0[k], fsy0[k], fsz0[k]};
+  for (int k = 0; k < w * NP; ++k) {
+    if (!slow[k]) continue;
+    const int l = k / NP;
+    const std::int64_t s = s_begin + k;
+    const Vec3 n{nx[k], ny[k], nz[k]}, e{ex[k], ey[k], ez[k]}, n_old{ox[l], oy[l], oz[l]};
+    const Vec3 d{dx[k], dy[k], dz[k]};
+    const Vec3 du = dt * Vec3{dvx[k], dvy[k], dvz[k]} - dot(d, n) * e;
+    const double off = kG0 ? g0[s] : 0.0;
+    const std::int64_t i = i0 + l;
+    spring_full_update(m, laws[mat[i]], i, s, d, du, n, n_old, off, t, fe);
+  }
+}
+
+template <int NP, bool kG0>
+void spring_forces_chunked(Model& m, double dt, double t) {
+  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  const std::int64_t nc = (ni + kChunk - 1) / kChunk;
+  const bool fe = !m.sp_w.empty();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t c = 0; c < nc; ++c) {
+    const std::int64_t i0 = c * kChunk;
+    spring_chunk<NP, kG0>(m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe);
+  }
+}
+
+}  // namespace
+
+void spring_forces(Model& m, double dt, double t) {
+  if (m.iface_normal.size() != m.n_ifaces()) {
+    m.iface_normal.assign(m.n_ifaces(), Vec3{});
+    m.iface_normal_set = false;
+  }
+  const bool g0 = !m.sp_g0.empty();
+  if (!m.iface_normal_set || (m.springs_per_iface != 2 && m.springs_per_iface != 3)) {
+    spring_forces_generic(m, dt, t);
+  } else if (m.springs_per_iface == 3) {
+    g0 ? spring_forces_chunked<3, true>(m, dt, t) : spring_forces_chunked<3, false>(m, dt, t);
+  } else {
+    g0 ? spring_forces_chunked<2, true>(m, dt, t) : spring_forces_chunked<2, false>(m, dt, t);
+  }
+}
+
+void spring_forces_reference(Model& m, double dt, double t) {
+  if (m.iface_normal.size() != m.n_ifaces()) {
+    m.iface_normal.assign(m.n_ifaces(), Vec3{});
+    m.iface_normal_set = false;
+  }
+  spring_forces_generic(m, dt, t);
 }
 
 void gather_spring_forces(Model& m) {

@@ -197,11 +197,15 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
   const double* __restrict vol0 = m.block_volume0.data();
   double* __restrict energy = m.strain_energy.data();
   double* __restrict jout = m.vol_ratio.data();
-  std::int64_t blk[W], xi[W], go[W];  // block, index of its node 0's x, of its geometry
+  static_assert(sizeof(Sym6) == 6 * sizeof(double));
+  double* __restrict sg = m.stress.data()->data();
+  // block; index of its node 0's x, of its geometry, of its stress
+  std::int64_t blk[W], xi[W], go[W], si[W];
   double lam_l[W], g_l[W], s0v[6][W];
   for (int l = 0; l < W; ++l) {
     const std::int32_t b = kFull ? b0 + l : b0 + std::min(l, n - 1);
     blk[l] = b;
+    si[l] = 6 * static_cast<std::int64_t>(b);
     xi[l] = 3 * static_cast<std::int64_t>(m.block_first_node[b]);
     go[l] = m.geom_offset[b];
     const auto k = m.block_material[b];
@@ -209,7 +213,7 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
     g_l[l] = m.mat_shear[k];
     for (int c = 0; c < 6; ++c) s0v[c][l] = kStress0 ? m.stress0[b][c] : 0.0;
   }
-  double F[9][W], R[9][W], sig[6][W];
+  double F[9][W], R[9][W], G[9][W];
   std::int64_t active[W], bad_lane[W];  // 64-bit flags: masks of the width of a double
 
   // F = Ds Dm^-1, det F, and the start of the polar decomposition (polar_3d_tet).
@@ -229,6 +233,8 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
                  f12 = dot3(d10, g2, d11, g5, d12, g8);
     const double f20 = dot3(d20, g0, d21, g3, d22, g6), f21 = dot3(d20, g1, d21, g4, d22, g7),
                  f22 = dot3(d20, g2, d21, g5, d22, g8);
+    G[0][l] = g0; G[1][l] = g1; G[2][l] = g2; G[3][l] = g3; G[4][l] = g4;
+    G[5][l] = g5; G[6][l] = g6; G[7][l] = g7; G[8][l] = g8;
     F[0][l] = f00; F[1][l] = f01; F[2][l] = f02;
     F[3][l] = f10; F[4][l] = f11; F[5][l] = f12;
     F[6][l] = f20; F[7][l] = f21; F[8][l] = f22;
@@ -309,10 +315,8 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
     const double r00 = R[0][l], r01 = R[1][l], r02 = R[2][l];
     const double r10 = R[3][l], r11 = R[4][l], r12 = R[5][l];
     const double r20 = R[6][l], r21 = R[7][l], r22 = R[8][l];
-    const std::int64_t q = go[l];
-    const double g0 = geom[q], g1 = geom[q + 1], g2 = geom[q + 2], g3 = geom[q + 3],
-                 g4 = geom[q + 4], g5 = geom[q + 5], g6 = geom[q + 6], g7 = geom[q + 7],
-                 g8 = geom[q + 8];
+    const double g0 = G[0][l], g1 = G[1][l], g2 = G[2][l], g3 = G[3][l], g4 = G[4][l],
+                 g5 = G[5][l], g6 = G[6][l], g7 = G[7][l], g8 = G[8][l];
     const double lam = lam_l[l], gs = g_l[l];
     const double s00 = s0v[0][l], s01 = s0v[1][l], s02 = s0v[2][l], s03 = s0v[3][l],
                  s04 = s0v[4][l], s05 = s0v[5][l];
@@ -358,12 +362,13 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
     fn[i] = -(0.0 + f1x + f2x + f3x);
     fn[i + 1] = -(0.0 + f1y + f2y + f3y);
     fn[i + 2] = -(0.0 + f1z + f2z + f3z);
-    sig[0][l] = dot3(p00, r00, p01, r01, p02, r02);
-    sig[1][l] = dot3(p10, r10, p11, r11, p12, r12);
-    sig[2][l] = dot3(p20, r20, p21, r21, p22, r22);
-    sig[3][l] = dot3(p00, r10, p01, r11, p02, r12);
-    sig[4][l] = dot3(p10, r20, p11, r21, p12, r22);
-    sig[5][l] = dot3(p00, r20, p01, r21, p02, r22);
+    const std::int64_t k = si[l];
+    sg[k] = dot3(p00, r00, p01, r01, p02, r02);
+    sg[k + 1] = dot3(p10, r10, p11, r11, p12, r12);
+    sg[k + 2] = dot3(p20, r20, p21, r21, p22, r22);
+    sg[k + 3] = dot3(p00, r10, p01, r11, p02, r12);
+    sg[k + 4] = dot3(p10, r20, p11, r21, p12, r22);
+    sg[k + 5] = dot3(p00, r20, p01, r21, p02, r22);
     // 0.5 lam tr^2 + G (exx^2 + eyy^2 + ezz^2 + 2 (exy^2 + eyz^2 + exz^2)) + s0:eps
     const double sq = std::fma(2.0, dot3(exy, exy, eyz, eyz, exz, exz),
                                dot3(exx, exx, eyy, eyy, ezz, ezz));
@@ -374,10 +379,7 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
     w = std::fma(2.0, dot3(exy, s03, eyz, s04, exz, s05), w);
     energy[b] = v0 * w;
   }
-  for (int l = 0; l < n; ++l) {
-    for (int c = 0; c < 6; ++c) m.stress[b0 + l][c] = sig[c][l];
-    inv[l] = bad_lane[l] != 0;
-  }
+  for (int l = 0; l < n; ++l) inv[l] = bad_lane[l] != 0;
 }
 
 }  // namespace

@@ -13,6 +13,11 @@
 // entry): the iteration the reference adds to see a change below 1e-15 changes R only by
 // rounding. A strain of 5e-4 takes 3 iterations instead of 4, a strain of 1e-6 2 instead of 3,
 // a strain below ~5e-10 1 instead of 2.
+//
+// block_forces_tet (physics/block_forces.cpp) runs this same iteration vectorised across blocks,
+// written out with explicit FMAs that reproduce this function's rounding as GCC 12 compiles it:
+// a change here must be made there too (the kernel's results are bitwise those of this scalar
+// path, which mean_polar_iterations in solver/bench.cpp still uses).
 #pragma once
 #include <algorithm>
 #include <cmath>

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "cdem/core/polar.hpp"
+#include "cdem/physics/polar_tet.hpp"
 #include "cdem/physics/springs.hpp"
 
 namespace cdem {
@@ -414,6 +415,65 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
       }
       if (inv[l]) note_inverted(inverted, b, first_inverted);
     }
+  }
+  return inverted;
+}
+
+// The tet kernel one block at a time (the form before vectorisation, kept as the reference the
+// chunked kernel reproduces bit for bit; test_tet_kernel.cpp). Outside the fp-contract=off
+// region: compiled with GCC's default contraction, as it always was.
+std::int64_t block_forces_tet_reference(Model& m, std::int32_t begin, std::int32_t end,
+                              std::int32_t* first_inverted, bool gather_springs) {
+  std::int64_t inverted = 0;
+#pragma omp parallel for schedule(static) reduction(+ : inverted)
+  for (std::int32_t b = begin; b < end; ++b) {
+    const auto n0 = m.block_first_node[b];
+    const double* g = m.geom.data() + m.geom_offset[b];
+    const ElasticConst k = elastic_of(m, b);
+    const Vec3 x0 = m.x[n0];
+    Mat3 ds;
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 d = m.x[n0 + 1 + j] - x0;
+      ds(0, j) = d.x; ds(1, j) = d.y; ds(2, j) = d.z;
+    }
+    Mat3 dminv;
+    for (int q = 0; q < 9; ++q) dminv.m[q] = g[q];
+    const Mat3 F = ds * dminv;
+    Mat3 R;
+    const int iters = polar_3d_tet(F, R);
+    const Mat3 U = transpose(R) * F;
+    const Sym6 s0 = stress0_of(m, b);
+    const double exx = U(0, 0) - 1, eyy = U(1, 1) - 1, ezz = U(2, 2) - 1;
+    const double exy = 0.5 * (U(0, 1) + U(1, 0)), eyz = 0.5 * (U(1, 2) + U(2, 1)),
+                 exz = 0.5 * (U(0, 2) + U(2, 0));
+    const double tr = exx + eyy + ezz;
+    Mat3 S;
+    S(0, 0) = k.lam * tr + 2 * k.g * exx + s0[0];
+    S(1, 1) = k.lam * tr + 2 * k.g * eyy + s0[1];
+    S(2, 2) = k.lam * tr + 2 * k.g * ezz + s0[2];
+    S(0, 1) = S(1, 0) = 2 * k.g * exy + s0[3];
+    S(1, 2) = S(2, 1) = 2 * k.g * eyz + s0[4];
+    S(0, 2) = S(2, 0) = 2 * k.g * exz + s0[5];
+    const Mat3 P = R * S;
+    const double v0 = m.block_volume0[b];
+    // grad N_j (j = 1..3) = row j-1 of Dm^-1; grad N_0 = -(sum)
+    Vec3 fsum{};
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 gn{dminv(j, 0), dminv(j, 1), dminv(j, 2)};
+      const Vec3 fj = -v0 * (P * gn);
+      m.f[n0 + 1 + j] = fj;
+      fsum += fj;
+    }
+    m.f[n0] = -fsum;
+    if (gather_springs) add_spring_forces(m, b);
+    const Mat3 sig = P * transpose(R);
+    m.stress[b] = {sig(0, 0), sig(1, 1), sig(2, 2), sig(0, 1), sig(1, 2), sig(0, 2)};
+    m.strain_energy[b] =
+        v0 * (0.5 * k.lam * tr * tr +
+              k.g * (exx * exx + eyy * eyy + ezz * ezz + 2 * (exy * exy + eyz * eyz + exz * exz)) +
+              s0[0] * exx + s0[1] * eyy + s0[2] * ezz + 2 * (s0[3] * exy + s0[4] * eyz + s0[5] * exz));
+    m.vol_ratio[b] = det(F);
+    if (iters < 0) note_inverted(inverted, b, first_inverted);
   }
   return inverted;
 }

@@ -16,8 +16,12 @@ std::int64_t block_forces_tri(Model& m, std::int32_t begin, std::int32_t end,
                               std::int32_t* first_inverted, bool gather_springs = false);
 std::int64_t block_forces_quad(Model& m, std::int32_t begin, std::int32_t end,
                                std::int32_t* first_inverted, bool gather_springs = false);
+// Vectorised across blocks (chunks of 8, block_forces.cpp); the same results bit for bit as
+// block_forces_tet_reference, one block at a time.
 std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
                               std::int32_t* first_inverted, bool gather_springs = false);
+std::int64_t block_forces_tet_reference(Model& m, std::int32_t begin, std::int32_t end,
+                                        std::int32_t* first_inverted, bool gather_springs = false);
 
 // All elastic groups; explosive groups are zeroed here and loaded by the explosive kernels.
 // gather_springs: then each block also adds its nodes' spring forces (gather_spring_forces for

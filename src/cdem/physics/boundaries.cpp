@@ -83,8 +83,6 @@ Boundaries prepare_boundaries(const Model& m, const Case& c) {
   }
   b.load_force.assign(3 * b.loads.size(), Vec3{});
   b.v_old.resize(nodes.size());
-  b.f_load.resize(nodes.size());
-  b.f_dash.resize(nodes.size());
   return b;
 }
 
@@ -122,18 +120,8 @@ void boundary_forces(Model& m, Boundaries& b, double t) {
     for (std::int64_t i = 0; i < nw; ++i) {
       const auto nd = b.work_nodes[i];
       b.v_old[i] = m.v[nd];
-      Vec3 fl{}, fd{};
-      for (auto e = b.node_load_offset[i]; e < b.node_load_offset[i + 1]; ++e) {
-        const auto entry = b.node_load_entry[e];
-        const Vec3 fe = b.load_force[entry];
-        m.f[nd] += fe;
-        if (b.loads[entry / 3].kind == 0)
-          fl += fe;
-        else
-          fd += fe;
-      }
-      b.f_load[i] = fl;
-      b.f_dash[i] = fd;
+      for (auto e = b.node_load_offset[i]; e < b.node_load_offset[i + 1]; ++e)
+        m.f[nd] += b.load_force[b.node_load_entry[e]];
     }
   }
 }
@@ -157,9 +145,19 @@ double apply_constraints(Model& m, Boundaries& b, double t, double dt) {
 double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed) {
   double w = 0, d = 0;
   for (std::size_t i = 0; i < b.work_nodes.size(); ++i) {
+    // The node's pressure and dashpot forces of the step, summed from the facet forces (kept
+    // in load_force until the next boundary_forces) in the serial order.
+    Vec3 fl{}, fd{};
+    for (auto e = b.node_load_offset[i]; e < b.node_load_offset[i + 1]; ++e) {
+      const auto entry = b.node_load_entry[e];
+      if (b.loads[entry / 3].kind == 0)
+        fl += b.load_force[entry];
+      else
+        fd += b.load_force[entry];
+    }
     const Vec3 vmid = 0.5 * (b.v_old[i] + m.v[b.work_nodes[i]]);
-    w += dot(b.f_load[i], vmid) * dt;
-    d -= dot(b.f_dash[i], vmid) * dt;
+    w += dot(fl, vmid) * dt;
+    d -= dot(fd, vmid) * dt;
   }
   if (absorbed) *absorbed = d;
   return w;

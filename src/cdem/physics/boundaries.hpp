@@ -32,10 +32,11 @@ struct Boundaries {
   std::vector<LoadFacet> loads;
   std::vector<TimeTable> tables;
   Vec3 gravity{};
-  // Energy book-keeping on the (few) boundary nodes: v(n-1/2), load and dashpot forces of the
-  // step, so that their work uses the mid-step velocity (v_old + v_new) / 2.
+  // Energy book-keeping on the (few) boundary nodes: v(n-1/2), so that the work of the step's
+  // load and dashpot forces (summed again from load_force by load_work) uses the mid-step
+  // velocity (v_old + v_new) / 2.
   std::vector<std::int32_t> work_nodes;
-  std::vector<Vec3> v_old, f_load, f_dash;
+  std::vector<Vec3> v_old;
   // Per work node, its load-facet contributions in the serial order (facet by facet, node q of
   // each): entries load * 3 + q of load_force, node_load_offset being a CSR offset (size
   // work_nodes + 1). Every node's force is summed in this order whatever the thread count.

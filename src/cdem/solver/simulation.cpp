@@ -216,7 +216,7 @@ std::size_t Simulation::solver_bytes() const {
   std::size_t b = bytes(block_dissipated_) + bytes(ke_) + bytes(cke_) + bytes(applied_.node) +
                   bytes(applied_.force) + bytes(applied_.v_old);
   b += bytes(bc_.constraints) + bytes(bc_.loads) + bytes(bc_.tables) + bytes(bc_.work_nodes) +
-       bytes(bc_.v_old) + bytes(bc_.f_load) + bytes(bc_.f_dash) + bytes(bc_.node_load_offset) +
+       bytes(bc_.v_old) + bytes(bc_.node_load_offset) +
        bytes(bc_.node_load_entry) + bytes(bc_.load_force);
   return b;
 }

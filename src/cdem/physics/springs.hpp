@@ -75,10 +75,9 @@ inline void add_spring_forces(Model& m, std::int32_t b) {
   const std::int32_t n0 = m.block_first_node[b];
   const int nn = m.block_first_node[b + 1] - n0;
   const int np = m.springs_per_iface;
-  // One accumulator per node in registers: each force is added to all four, as itself where
-  // the node matches and as +0 elsewhere (an accumulator starting at +0 never becomes -0, so
-  // adding +0 changes no bit); no store-to-load chain through an indexed array.
-  Vec3 acc0{}, acc1{}, acc2{}, acc3{};
+  // One accumulator per node (x, y, z of node j at 3 j): the three spring points of an interface
+  // side belong to three different nodes, so consecutive updates do not wait on each other.
+  double acc[12] = {};
   for (auto k = m.block_iface_offset[b]; k < m.block_iface_offset[b + 1]; ++k) {
     const std::int32_t e = m.block_iface_list[k];
     const bool a_side = e > 0;
@@ -86,19 +85,16 @@ inline void add_spring_forces(Model& m, std::int32_t b) {
     const Vec3 n = m.iface_normal[s0 / np];
     const std::int32_t* node = (a_side ? m.sp_a.data() : m.sp_b.data()) + s0;
     for (int q = 0; q < np; ++q) {
-      const Vec3 f0 = m.sp_fn[s0 + q] * n + m.sp_fs[s0 + q];
-      const Vec3 f = a_side ? f0 : -f0;  // a - f0 == a + (-f0) exactly
-      const int j = node[q] - n0;
-      acc0 += j == 0 ? f : Vec3{};
-      acc1 += j == 1 ? f : Vec3{};
-      acc2 += j == 2 ? f : Vec3{};
-      acc3 += j == 3 ? f : Vec3{};
+      const Vec3 f = m.sp_fn[s0 + q] * n + m.sp_fs[s0 + q];
+      double* a = acc + 3 * (node[q] - n0);
+      if (a_side) {
+        a[0] += f.x; a[1] += f.y; a[2] += f.z;
+      } else {
+        a[0] -= f.x; a[1] -= f.y; a[2] -= f.z;
+      }
     }
   }
-  m.f[n0] += acc0;
-  m.f[n0 + 1] += acc1;
-  m.f[n0 + 2] += acc2;
-  if (nn > 3) m.f[n0 + 3] += acc3;
+  for (int j = 0; j < nn; ++j) m.f[n0 + j] += Vec3{acc[3 * j], acc[3 * j + 1], acc[3 * j + 2]};
 }
 
 // The same for every block, parallel over blocks (tests and benchmarks; the step fuses it into

@@ -2,6 +2,7 @@
 // (round trip) and generation (areas and volumes, regions, face sets, quads, refinement).
 #include <gmsh.h>
 #include <gtest/gtest.h>
+#include <omp.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -128,6 +129,19 @@ TEST(GmshRead, AsciiV41MixedTrianglesAndQuad) {
   EXPECT_EQ(m.point_names, (std::vector<std::string>{"corner"}));
   EXPECT_NEAR(total_measure(m), 2.0, 1e-15);
   expect_all_positive(m);
+}
+
+// Gmsh's General.NumThreads = 1 sets OpenMP's thread count of the calling thread to 1; a
+// session must give the caller its own setting back (before this, every `cdemblast run` of a
+// Gmsh mesh ran its time steps on one thread whatever --threads said).
+TEST(GmshRead, SessionRestoresTheOpenMpThreadCount) {
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(3);
+  (void)read_gmsh(data("mixed_v41.msh"));
+  EXPECT_EQ(omp_get_max_threads(), 3);
+  { GmshSession outer("outer"); { GmshSession inner("inner"); } }
+  EXPECT_EQ(omp_get_max_threads(), 3);
+  omp_set_num_threads(before);
 }
 
 TEST(GmshRead, BinaryV41SameAsAscii) {

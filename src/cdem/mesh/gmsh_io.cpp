@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 #include <gmsh.h>
+#include <omp.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -35,6 +36,10 @@ std::recursive_mutex& gmsh_mutex() {
 }
 int g_session_depth = 0;
 int g_nested_models = 0;
+// OpenMP threads of the caller before the outermost session: Gmsh's General.NumThreads = 1
+// calls omp_set_num_threads(1), which would leave every later parallel region of the run on
+// one thread; the outermost session restores the caller's setting when it ends.
+int g_caller_threads = 0;
 
 }  // namespace
 
@@ -42,6 +47,7 @@ GmshSession::GmshSession(std::string context) : context_(std::move(context)) {
   gmsh_mutex().lock();
   try {
     if (g_session_depth == 0) {
+      g_caller_threads = omp_get_max_threads();
       // No configuration files (reproducible), no terminal output, one thread (reproducible
       // meshes); errors throw (General.AbortOnError = 2 is set by initialize).
       gmsh::initialize(0, nullptr, false);
@@ -64,6 +70,7 @@ GmshSession::GmshSession(std::string context) : context_(std::move(context)) {
         gmsh::finalize();
       } catch (...) {
       }
+      if (g_caller_threads > 0) omp_set_num_threads(g_caller_threads);
     }
     if (g_session_depth > 0) --g_session_depth;
     gmsh_mutex().unlock();
@@ -89,6 +96,7 @@ GmshSession::~GmshSession() {
     }
   } catch (...) {
   }
+  if (!nested_ && g_caller_threads > 0) omp_set_num_threads(g_caller_threads);
   --g_session_depth;
   gmsh_mutex().unlock();
 }

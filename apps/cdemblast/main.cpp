@@ -122,6 +122,10 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   bench->add_option("--steps", bench_opt.steps, "Timed steps (default 200)")->check(CLI::PositiveNumber);
   bench->add_option("--threads", bench_opt.threads, "Threads (default: OMP_NUM_THREADS, else all cores)")->check(CLI::NonNegativeNumber);
+  bench->add_option("--warmup-broken", bench_opt.warmup_broken,
+                    "Warm up until this fraction of the spring points is broken (default 0.005; "
+                    "larger: a later, more cracked state)")
+      ->check(CLI::Range(0.0, 0.9));
   bench->add_flag("--json", bench_opt.json, "Print one JSON object");
 
   try {

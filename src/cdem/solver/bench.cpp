@@ -450,11 +450,11 @@ int run_bench(const BenchOptions& opt) {
   const auto nsp = static_cast<double>(m0.n_springs());
   const std::size_t mem = bench::model_bytes(m0);
 
-  // Warm-up: step until cracking is under way (0.5 % of the spring points broken), at most
-  // 20 x steps + 2000 steps.
+  // Warm-up: step until cracking is under way (--warmup-broken, default 0.5 % of the spring
+  // points broken), at most 20 x steps + 2000 steps (x 10 beyond the default fraction).
   const std::int64_t want_broken =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(0.005 * nsp));
-  const std::int64_t max_warm = 20LL * steps + 2000;
+      std::max<std::int64_t>(1, static_cast<std::int64_t>(opt.warmup_broken * nsp));
+  const std::int64_t max_warm = (20LL * steps + 2000) * (opt.warmup_broken > 0.005 ? 10 : 1);
   const double warm0 = omp_get_wtime();
   std::int64_t warm_steps = 0, broken0 = 0;
   while (warm_steps < max_warm) {

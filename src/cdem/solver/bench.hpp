@@ -29,6 +29,8 @@ struct BenchOptions {
   int threads = 0;              // threads of the main figures; 0: omp_get_max_threads()
                                 // (OMP_NUM_THREADS when set)
   bool json = false;            // one JSON object on stdout instead of the text report
+  double warmup_broken = 0.005;  // warm up until this fraction of the spring points is broken
+                                 // (a larger one times a later, more cracked blast state)
 };
 
 // Runs the benchmark and prints its report on stdout. Returns 0.

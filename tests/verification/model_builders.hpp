@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <string>
 #include <utility>
@@ -144,6 +145,13 @@ void assign_region(Mesh& mesh, const std::string& name, Pred pred) {
     for (int i = 0; i < k; ++i) c += mesh.vertices[mesh.elem_vertices[e][i]];
     if (pred(c / k)) mesh.elem_region[e] = r;
   }
+}
+
+// Two arrays equal bit for bit (memcmp): the vectorised kernels against their references.
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 
 inline Model make_model(const Mesh& mesh, const BlockMaterial& mat, const InterfaceMaterial& im) {

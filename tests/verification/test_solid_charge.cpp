@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "cdem/physics/springs.hpp"
 #include "cdem/core/error.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/explosive/eos.hpp"
@@ -227,12 +228,10 @@ TEST(SolidCharge, InvertedBlockIsReportedAndCarriesNoPressure) {
     for (int k = 0; k < 6; ++k) EXPECT_EQ(m.stress[b][k], 0.0);
     for (auto n : out.node) EXPECT_NE(m.node_block(n), b) << "force on the dead block";
     // It is let go: every spring point at its nodes is released (no force, no contact).
-    for (auto n = n0; n < m.block_first_node[b + 1]; ++n)
-      for (std::size_t sp = 0; sp < m.n_springs(); ++sp)
-        if (m.sp_a[sp] == n || m.sp_b[sp] == n) {
-          EXPECT_EQ(m.sp_state[sp], kReleased) << "spring point " << sp;
-          EXPECT_EQ(m.sp_fn[sp], 0.0);
-        }
+    for_each_block_spring(m, b, [&m](std::size_t sp) {
+      EXPECT_EQ(m.sp_state[sp], kReleased) << "spring point " << sp;
+      EXPECT_EQ(m.sp_fn[sp], 0.0);
+    });
     for (std::size_t i = 0; i < sc.block.size(); ++i) {
       if (i != 3) {
         EXPECT_NEAR(sc.p[i], kP0, 1e-12 * kP0) << "block " << i;

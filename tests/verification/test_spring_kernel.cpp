@@ -27,12 +27,6 @@ namespace {
 
 using namespace test_models;
 
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
 struct Counts {
   std::size_t broken = 0, released = 0, intact = 0;
 };

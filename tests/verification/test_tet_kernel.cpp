@@ -25,12 +25,6 @@ namespace {
 
 using namespace test_models;
 
-template <class T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() &&
-         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
 TEST(TetKernel, VectorisedMatchesReferenceBitForBit) {
   const Mesh mesh = tet_box(6, 5, 5, 0.6, 0.5, 0.5);
   Model base = make_model(mesh, rock(), interface_of(InterfaceLaw::MohrCoulomb));

@@ -226,7 +226,8 @@ Lame2DResult run_lame_2d(double alpha, double b_over_a, int n_theta, double ramp
   c.title = "lame_2d";
   c.dt_safety = 0.5;
   c.materials = {rock_with_damping(c_d)};
-  c.interfaces = {elastic_bond(alpha)};
+  c.interfaces = {elastic_bond(alpha > 0 ? alpha : 10.0)};
+  c.interface_mode = alpha > 0 ? InterfaceMode::Springs : InterfaceMode::Tied;  // 0: tied
   c.boundaries = {bc("hole", BoundaryType::Pressure, kP, {{0.0, 0.0}, {t_ramp, 1.0}}),
                   bc("outer", BoundaryType::Fixed), bc("xaxis", BoundaryType::Roller),
                   bc("yaxis", BoundaryType::Roller)};
@@ -267,8 +268,10 @@ Lame2DResult run_lame_2d(double alpha, double b_over_a, int n_theta, double ramp
   Lame2DResult res;
   const double lam = probe.lambda(), g = probe.shear();
   // Effective medium with the springs (header comment).
-  const double bulk2 = 1.0 / (1.0 / (2 * (lam + g)) + 1.0 / (alpha * kE));  // 2 (lam' + G')
-  const double g2 = 1.0 / (1.0 / (2 * g) + 1.0 / (alpha * kE));             // 2 G'
+  // (tied, alpha = 0: no spring compliance, the plain medium)
+  const double spring = alpha > 0 ? 1.0 / (alpha * kE) : 0.0;
+  const double bulk2 = 1.0 / (1.0 / (2 * (lam + g)) + spring);  // 2 (lam' + G')
+  const double g2 = 1.0 / (1.0 / (2 * g) + spring);             // 2 G'
   res.exact = {2, a, b, kP, 0.5 * bulk2 - 0.5 * g2, 0.5 * g2};
   res.plain = {2, a, b, kP, lam, g};
 
@@ -446,7 +449,8 @@ Lame3DResult run_lame_3d(double alpha, double b_over_a, double beta, double ramp
   c.title = "lame_3d";
   c.dt_safety = 0.5;
   c.materials = {rock_with_damping(c_d)};
-  c.interfaces = {elastic_bond(alpha)};
+  c.interfaces = {elastic_bond(alpha > 0 ? alpha : 10.0)};
+  c.interface_mode = alpha > 0 ? InterfaceMode::Springs : InterfaceMode::Tied;  // 0: tied
   c.boundaries = {bc("cavity", BoundaryType::Pressure, kP, {{0.0, 0.0}, {t_ramp, 1.0}}),
                   bc("outer", BoundaryType::Fixed), bc("sym_x", BoundaryType::Roller),
                   bc("sym_y", BoundaryType::Roller), bc("sym_z", BoundaryType::Roller)};
@@ -461,7 +465,7 @@ Lame3DResult run_lame_3d(double alpha, double b_over_a, double beta, double ramp
     // the face area: the interface's np spring points share it (A_c = A / np)
     sum += m.springs_per_iface * m.sp_area[s0] / (m.sp_kn[s0] / m.sp_area[s0]);
   }
-  res.rho_n = sum / vol;
+  res.rho_n = alpha > 0 ? sum / vol : 0.0;  // tied: no spring compliance
   const double lam = probe.lambda(), g = probe.shear(), kb = probe.bulk();
   const double rho_s = res.rho_n * kE / g;
   const double k_eff = 1.0 / (1.0 / kb + res.rho_n);
@@ -599,6 +603,10 @@ const Lame2DResult& lame_2d() {
 // 3D: b = 3 a, element size 0.12 r (about 5400 tets), the finest mesh that keeps the test
 // within its time budget; alpha = 100 (springs soften by ~3 %) and alpha = 10 (~30 %).
 const Lame3DResult& lame_3d(double alpha) {
+  if (alpha == 0.0) {
+    static const Lame3DResult r0 = run_lame_3d(0.0, 3.0, 0.12, 6.0, 8.0);
+    return r0;
+  }
   if (alpha == 100.0) {
     static const Lame3DResult r100 = run_lame_3d(100.0, 3.0, 0.12, 6.0, 8.0);
     return r100;
@@ -707,6 +715,46 @@ TEST(Lame3D, SphericalCavityMatchesThickSphere) {
   });
   EXPECT_LT(res.blocks, 8000u);
   EXPECT_LT(res.steps, 10000);
+}
+
+// Tied interfaces (the default mode): the rock is the conforming tet mesh, no spring compliance,
+// on the mesh where alpha = 10 springs soften it by ~30 %.
+// - Radial displacement against the plain thick-sphere solution, within 3 % away from the wall
+//   (1.2 a to 2.4 a): the constant-strain tets' own stiffness error on this mesh is -1.4 to
+//   -1.6 % (measured with alpha = 1000 springs, DISABLED_MeshAndAlphaStudy); 3 % is twice it.
+// - Stresses as above (4 %).
+TEST(Lame3D, TiedSphericalCavityMatchesThickSphere) {
+  const auto& res = lame_3d(0.0);
+  const double a = res.exact.a;
+  EXPECT_LT(res.settle, kSettleTol);
+  for_bins_3d(res, [&](const RadialRow& w, double lo, double hi) {
+    const double scale = kP * std::pow(a / w.r, 3);
+    EXPECT_NEAR((w.sr - w.sr_ex) / scale, 0.0, 0.04) << "sigma_r in " << lo << "-" << hi << " a";
+    EXPECT_NEAR((w.st - w.st_ex) / (0.5 * scale), 0.0, 0.04)
+        << "sigma_t in " << lo << "-" << hi << " a";
+    EXPECT_NEAR(w.u / w.u_ex, 1.0, 0.03) << "u in " << lo << "-" << hi << " a";
+    std::printf("[lame 3D tied] %.1f-%.1f a: u / u_exact %.4f, sigma_r error %+.2f %%, sigma_t "
+                "error %+.2f %%\n",
+                lo, hi, w.u / w.u_ex, 100 * (w.sr - w.sr_ex) / scale,
+                100 * (w.st - w.st_ex) / (0.5 * scale));
+  });
+}
+
+// Tied 2D: the quad annulus of the test above with tied interfaces: the plain thick-cylinder
+// solution. Stresses 1 % and displacement 1.5 % as above (with alpha = 1000 springs the same
+// mesh gives -0.15 .. -0.2 % on u).
+TEST(Lame2D, TiedPressurisedHoleMatchesThickCylinder) {
+  static const Lame2DResult res = run_lame_2d(0.0, 10.0, 24, 6.0, 8.0);
+  const double a = res.exact.a;
+  EXPECT_LT(res.settle, kSettleTol);
+  for (double ra : kRadii2D) {
+    const auto& w = ring_near(res, ra * a);
+    const double scale = kP * (a / w.r) * (a / w.r);
+    EXPECT_NEAR((w.sr - w.sr_ex) / scale, 0.0, 0.01) << "sigma_r at r = " << w.r / a << " a";
+    EXPECT_NEAR((w.st - w.st_ex) / scale, 0.0, 0.01) << "sigma_theta at r = " << w.r / a << " a";
+    EXPECT_NEAR(w.u / w.u_ex, 1.0, 0.015) << "u at r = " << w.r_u / a << " a";
+    std::printf("[lame 2D tied] r = %.1f a: u / u_exact %.4f\n", w.r_u / a, w.u / w.u_ex);
+  }
 }
 
 // Studies behind the tolerances (docs/verification_waves_lame.md), not run by default (minutes

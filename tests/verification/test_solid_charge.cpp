@@ -300,18 +300,19 @@ TEST(SolidCharge, CollapsedBlockInRunStaysFinite) {
 // Energy balance of the explosive loads
 // ---------------------------------------------------------------------------------------------
 
-// Simulation::energy() gives the kinetic energy at t_n (from v_mid = (v(n-1/2) + v(n+1/2)) / 2)
-// and the strain energies at x(n). The work of the explosive loads consistent with them is the
-// work up to t_n: with dW_n = F(n) . v_mid dt the work of step n (t_(n-1/2) .. t_(n+1/2)),
-// W_n = sum_(k<n) dW_k + dW_n / 2. The test integrates it itself (WorkMeter, from the forces the
-// hook adds and the velocities before and after the step) and checks that the explosive_work
-// Simulation reports is that same integral: W_n, or W_n + dW_n / 2 (the work up to t_(n+1/2), what
-// step() accumulates today; see the skipped test below).
+// Simulation::energy() gives the kinetic energy at t_n of the leapfrog invariant,
+// 1/2 m v(n-1/2).v(n+1/2), and the strain energies at x(n). The work of the explosive loads
+// consistent with them is the work up to t_n: with dW_n = F(n) . v_mid dt the work of step n
+// (t_(n-1/2) .. t_(n+1/2)) and its part after t_n a_n = F(n) . v(n+1/2) dt / 2,
+// W_n = sum_(k<=n) dW_k - a_n (summation by parts: the central-difference scheme conserves the
+// invariant minus this work exactly in linear elasticity; docs/theory.md "Energy balance"). The
+// test integrates it itself (WorkMeter, from the forces the hook adds and the velocities before
+// and after the step) and checks that the explosive_work Simulation reports is that integral.
 struct WorkMeter {
   std::vector<std::int32_t> node;
   std::vector<Vec3> force, v_old;
   double w_full = 0;  // sum over the steps done of dW_k (up to t_(n+1/2))
-  double dw = 0;      // the last step's dW_n
+  double after = 0;   // the last step's a_n
   // In the load hook, after the loads were added: copy what this step added (entries from `first`).
   void record(const AppliedLoads& out, std::size_t first) {
     node.assign(out.node.begin() + static_cast<std::ptrdiff_t>(first), out.node.end());
@@ -320,13 +321,16 @@ struct WorkMeter {
   }
   // After the step: m.v holds v(n+1/2).
   void finish_step(const Model& m, double dt) {
-    dw = 0;
-    for (std::size_t i = 0; i < node.size(); ++i)
+    double dw = 0;
+    after = 0;
+    for (std::size_t i = 0; i < node.size(); ++i) {
       dw += dot(force[i], 0.5 * (v_old[i] + m.v[node[i]])) * dt;
+      after += 0.5 * dt * dot(force[i], m.v[node[i]]);
+    }
     w_full += dw;
     node.clear();
   }
-  double w_at_tn() const { return w_full - 0.5 * dw; }
+  double w_at_tn() const { return w_full - after; }
 };
 
 struct EnergySample {
@@ -353,8 +357,7 @@ std::vector<EnergySample> run_energy(Simulation& sim, WorkMeter& meter, int step
         q.work > 0 ? std::abs(q.mechanical + q.dissipated - e.initial - q.work) / q.work : 0.0;
     // The reported work is the integral of the hook's loads (1e-12: sums in the same order).
     const double tol = 1e-12 * std::max(std::abs(meter.w_full), 1e-300);
-    EXPECT_TRUE(std::abs(e.explosive_work - meter.w_full) <= tol ||
-                std::abs(e.explosive_work - meter.w_at_tn()) <= tol)
+    EXPECT_LE(std::abs(e.explosive_work - meter.w_at_tn()), tol)
         << "step " << k << ": reported " << e.explosive_work << " J, integrated " << meter.w_at_tn()
         << " J up to t_n, " << meter.w_full << " J up to t_(n+1/2)";
     EXPECT_TRUE(std::isfinite(e.balance)) << "step " << k;
@@ -452,10 +455,13 @@ TEST(ExplosiveEnergy, BarLoadedRunBalances) {
   const double t_half = t_half_work(r1);
   const double late_mid = max_after(r1, t_half, &EnergySample::error_mid);
   EXPECT_LT(late_mid, 0.01);
+  // The attribution of the work to t_n is exact for a linear system (summation by parts), so what
+  // is left is the model's own nonlinearity (co-rotation; the springs' total-form normal force on
+  // a turning normal): at or below 1e-4 at 30 us, or falling with dt.
   const double e30_1 = at(r1, 3e-5).error, e30_4 = at(r4, 3e-5).error;
-  EXPECT_LT(e30_4, e30_1 / 3.0);
+  EXPECT_LT(e30_4, std::max(e30_1 / 3.0, 1e-4));
   const double m30_1 = at(r1, 3e-5).error_mid, m30_4 = at(r4, 3e-5).error_mid;
-  EXPECT_LT(m30_4, m30_1 / 3.0);
+  EXPECT_LT(m30_4, std::max(m30_1 / 3.0, 1e-4));
   std::printf(
       "[charges] bar: %zu steps of dt = %.4g s, W = %.6g J, mechanical = %.6g J; from "
       "t = %.3g s (half the work) max error %.3e (reported) %.3e (work to t_n); at 30 us: "

@@ -10,6 +10,7 @@
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 #include "cdem/physics/springs.hpp"
+#include "cdem/physics/ties.hpp"
 
 namespace cdem {
 namespace {
@@ -482,6 +483,7 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
       // booked as dissipated, so the energy balance stays closed.
       for_each_block_spring(m, b, [&m](std::size_t sp) {
         if (m.sp_state[sp] == kReleased) return;
+        if (m.tied) untie_point(m, sp);  // tied mode: its clusters split (ties.hpp)
         m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
                                0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
         m.sp_state[sp] = kReleased;

@@ -295,7 +295,7 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
                     "history_interval", "release_distance_factor", "energy_blowup_factor",
-                    "max_steps", "gravity"});
+                    "max_steps", "gravity", "interfaces", "opened_stiffness"});
   c.end_time = sim->positive("end_time");
   c.dt_safety = sim->positive("dt_safety", 0.5);
   if (c.dt_safety > 1.0)
@@ -318,6 +318,14 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   if (c.max_steps < 0)
     throw InputError(fmt::format("{}: expected an integer >= 0 (0: no limit), got {}", sim->where("max_steps"), c.max_steps));
   c.gravity = sim->vec("gravity", {});
+  c.interface_mode = sim->choice("interfaces", {"tied", "springs"}, "tied") == "tied"
+                     ? InterfaceMode::Tied
+                     : InterfaceMode::Springs;
+  c.opened_stiffness = sim->positive("opened_stiffness", 0.25);
+  if (c.opened_stiffness > 4.0)
+    throw InputError(fmt::format("{}: expected a value in (0, 4], got {} (the opened points' share "
+                                 "of the blocks' stability limit; dt shrinks by 1 / sqrt(1 + it))",
+                                 sim->where("opened_stiffness"), c.opened_stiffness));
 
   // ---- block materials ----
   const auto mats = top.array_of_tables("material");
@@ -508,10 +516,10 @@ std::string resolved_case_toml(const Case& c) {
   o += fmt::format("\n[simulation]\nend_time = {:.17g}\ndt_safety = {:.17g}\ndt = {:.17g}\n"
                    "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
                    "release_distance_factor = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
-                   "max_steps = {}\ngravity = {}\n",
+                   "max_steps = {}\ngravity = {}\ninterfaces = {}\nopened_stiffness = {:.17g}\n",
                    c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
                    c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
-                   c.max_steps, vec_str(c.gravity));
+                   c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness);
   o += "output_times = [";
   for (std::size_t i = 0; i < c.output_times.size(); ++i)
     o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);

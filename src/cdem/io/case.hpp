@@ -100,6 +100,12 @@ struct AnalysisSettings {
                                         // (default: the face sets with fixed boundaries)
 };
 
+// How intact interfaces act (docs/theory.md "Tied interfaces"): "tied" (the nodes split from a
+// vertex move as one while the points joining them are intact; springs only where the rock has
+// broken) or "springs" (SPEC 1.3 as the method paper: every interface is a spring from t = 0).
+enum class InterfaceMode { Tied, Springs };
+inline const char* name_of(InterfaceMode i) { return i == InterfaceMode::Tied ? "tied" : "springs"; }
+
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
   std::string dir;          // its directory
@@ -120,6 +126,8 @@ struct Case {
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   std::int64_t max_steps = 0;           // 0: unlimited
+  InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
+  double opened_stiffness = 0.25;       // tied: opened points' share eta of the blocks' omega_max^2
 
   Vec3 gravity{};
   std::vector<BlockMaterial> materials;

@@ -121,6 +121,26 @@ struct Model {
   std::vector<std::int32_t> block_iface_list;    // i + 1 when the block is A, -(i + 1) when B;
                                                  // ascending i
 
+  // ---- tied interfaces (simulation.interfaces = "tied"; physics/ties.hpp) ----
+  // The nodes split from one mesh vertex that are joined through tied spring points form a
+  // cluster and move as one (one velocity, integrate_tied); a tied point carries no spring force
+  // and costs no spring update. A point is untied when the blocks' traction on its face breaks
+  // it (tie_failure); it then acts as an ordinary spring point (broken: contact and friction;
+  // fracture-energy law: cohesive softening) with the stiffness of opened points.
+  bool tied = false;
+  std::vector<std::uint8_t> sp_tied;          // 1: the point ties its two nodes
+  std::vector<std::int32_t> vtx_offset;       // CSR vertex -> nodes (size n_vertices + 1)
+  std::vector<std::int32_t> vtx_nodes;        // per vertex its nodes, cluster by cluster, each
+                                              // cluster ascending, clusters by their first node
+  std::vector<std::uint8_t> vtx_run;          // 1 at the first node of each cluster (vtx_nodes)
+  std::vector<std::uint8_t> iface_check;      // 1: the interface has a tied point that can break
+  std::vector<std::uint8_t> iface_active;     // 1: the interface has an untied point (its springs
+                                              // are updated); listed in active_ifaces
+  std::vector<std::int32_t> active_ifaces;    // capacity n_ifaces, reserved at set-up
+  std::vector<std::uint8_t> block_active;     // 1: the block has an active interface (gather)
+  std::vector<std::int32_t> vtx_scratch;      // set-up-sized work space of the cluster split
+  std::size_t n_vertices() const { return vtx_offset.empty() ? 0 : vtx_offset.size() - 1; }
+
   // ---- materials ----
   std::vector<BlockMaterial> block_materials;
   std::vector<InterfaceMaterial> iface_materials;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <numeric>
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/element_geometry.hpp"
@@ -83,7 +84,31 @@ Boundaries prepare_boundaries(const Model& m, const Case& c) {
   }
   b.load_force.assign(3 * b.loads.size(), Vec3{});
   b.v_old.resize(nodes.size());
+  b.con_order.resize(b.constraints.size());
+  std::iota(b.con_order.begin(), b.con_order.end(), 0);
+  std::stable_sort(b.con_order.begin(), b.con_order.end(), [&b](std::int32_t p, std::int32_t q) {
+    return b.constraints[p].node < b.constraints[q].node;
+  });
+  for (auto k : b.con_order) b.con_node.push_back(b.constraints[k].node);
   return b;
+}
+
+namespace {
+inline Vec3 apply_one(const Boundaries& b, const Boundaries::Constraint& c, Vec3 v, double t) {
+  switch (c.kind) {
+    case 0: return {};
+    case 1: return v - dot(v, c.dir) * c.dir;
+    case 2: return b.tables[c.table](t) * c.dir;
+  }
+  return v;
+}
+}  // namespace
+
+Vec3 constrain_velocity(const Boundaries& b, std::int32_t n, Vec3 v, double t) {
+  auto it = std::lower_bound(b.con_node.begin(), b.con_node.end(), n);
+  for (; it != b.con_node.end() && *it == n; ++it)
+    v = apply_one(b, b.constraints[b.con_order[it - b.con_node.begin()]], v, t);
+  return v;
 }
 
 void boundary_forces(Model& m, Boundaries& b, double t) {
@@ -126,24 +151,23 @@ void boundary_forces(Model& m, Boundaries& b, double t) {
   }
 }
 
-double apply_constraints(Model& m, Boundaries& b, double t, double dt) {
-  double w = 0;
+double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after) {
+  double w = 0, wa = 0;
   for (const auto& c : b.constraints) {
     Vec3& v = m.v[c.node];
     const Vec3 vfree = v;
-    switch (c.kind) {
-      case 0: v = {}; break;
-      case 1: v -= dot(v, c.dir) * c.dir; break;
-      case 2: v = b.tables[c.table](t) * c.dir; break;
-    }
+    v = apply_one(b, c, v, t);
     const Vec3 reaction = (m.mass[c.node] / dt) * (v - vfree);
     w += dot(reaction, 0.5 * (b.v_old[c.slot] + v)) * dt;
+    wa += 0.5 * dt * dot(reaction, v);
   }
+  if (after) *after = wa;
   return w;
 }
 
-double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed) {
-  double w = 0, d = 0;
+double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed, double* after,
+                 double* absorbed_after) {
+  double w = 0, d = 0, wa = 0, da = 0;
   for (std::size_t i = 0; i < b.work_nodes.size(); ++i) {
     // The node's pressure and dashpot forces of the step, summed from the facet forces (kept
     // in load_force until the next boundary_forces) in the serial order.
@@ -158,8 +182,13 @@ double load_work(const Model& m, const Boundaries& b, double dt, double* absorbe
     const Vec3 vmid = 0.5 * (b.v_old[i] + m.v[b.work_nodes[i]]);
     w += dot(fl, vmid) * dt;
     d -= dot(fd, vmid) * dt;
+    const Vec3 v1 = m.v[b.work_nodes[i]];
+    wa += 0.5 * dt * dot(fl, v1);
+    da -= 0.5 * dt * dot(fd, v1);
   }
   if (absorbed) *absorbed = d;
+  if (after) *after = wa;
+  if (absorbed_after) *absorbed_after = da;
   return w;
 }
 

@@ -42,7 +42,14 @@ struct Boundaries {
   // work_nodes + 1). Every node's force is summed in this order whatever the thread count.
   std::vector<std::int32_t> node_load_offset, node_load_entry;
   std::vector<Vec3> load_force;  // per load facet and node q, the step's force (3 per facet)
+  // The constraints ordered by node (then by their order in `constraints`): con_node[k] is the
+  // node of constraints[con_order[k]] (constrain_velocity's binary search; tied mode).
+  std::vector<std::int32_t> con_node, con_order;
 };
+
+// Applies every constraint of node n, in their order, to the velocity v (prescribed values at
+// time t); v unchanged when the node has none.
+Vec3 constrain_velocity(const Boundaries& b, std::int32_t n, Vec3 v, double t);
 
 // Throws InputError naming the case file and key for an unknown face set.
 Boundaries prepare_boundaries(const Model& m, const Case& c);
@@ -51,10 +58,13 @@ Boundaries prepare_boundaries(const Model& m, const Case& c);
 void boundary_forces(Model& m, Boundaries& b, double t);
 
 // Velocity constraints on v(n+1/2), prescribed values taken at t (= t_n + dt/2). Returns the
-// work of the constraint reactions over the step, R . v_mid dt with R = m (v_c - v_free) / dt.
-double apply_constraints(Model& m, Boundaries& b, double t, double dt);
+// work of the constraint reactions over the step, R . v_mid dt with R = m (v_c - v_free) / dt;
+// *after = its part after t_n, 1/2 dt R . v(n+1/2) (Simulation::energy).
+double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after);
 
-// Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0).
-double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed);
+// Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0), and
+// the parts of each after t_n, 1/2 dt F . v(n+1/2) (*after, *absorbed_after).
+double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed, double* after,
+                 double* absorbed_after);
 
 }  // namespace cdem

@@ -5,9 +5,10 @@
 // Per block (its nodes are contiguous; the loop runs over blocks, each summing its nodes in
 // order: bitwise the same for any thread count):
 //   dissipated[b] += the energy both dampings dissipated at its nodes over the step (J);
-//   with `ke` non-null, ke[b] = the kinetic energy at t_n, sum of 1/2 m |v_mid|^2 with
-//   v_mid = (v(n-1/2) + v(n+1/2)) / 2, and, with `cke` non-null too, cke[b] = sum of c ke
-//   (c the viscous coefficient; 2 dt cke is the step's viscous dissipation).
+//   with `ke` non-null, ke[b] = the kinetic energy at t_n of the leapfrog invariant, the sum of
+//   1/2 m v(n-1/2).v(n+1/2), and, with `cke` non-null too, cke[b] = the part after t_n of the
+//   step's damping dissipation, sum of 1/2 dt (c m v_mid - F_d) . v(n+1/2) with
+//   v_mid = (v(n-1/2) + v(n+1/2)) / 2 (c the viscous coefficient): see Simulation::energy.
 // An empty Model::damping or Model::local_damping means zero for every node (see
 // release_zero_damping); `dissipated` is then not read (may be null) when both are empty.
 #pragma once
@@ -19,6 +20,19 @@ namespace cdem {
 
 void integrate(Model& m, Vec3 gravity, double dt, double* dissipated, double* ke,
                double* cke = nullptr);
+
+struct Boundaries;
+
+// Tied mode (ties.hpp): the same update with one velocity per vertex cluster, the velocity
+// constraints of the cluster's nodes applied to it (prescribed values at t_mid = t_n + dt/2),
+// then copied to its nodes (integrate.cpp). Per vertex: dissipated[v] += the damping
+// dissipation, with `ke` non-null ke[v] (and cke[v]) as above, reaction[2 v] = the work of the
+// constraint reactions over the step and reaction[2 v + 1] its part after t_n,
+// 1/2 dt R . v(n+1/2). vtx_con[v] != 0 marks the vertices with a constrained
+// node (null: none).
+void integrate_tied(Model& m, const Boundaries& bc, double dt, double t_mid,
+                    const std::uint8_t* vtx_con, double* dissipated, double* ke, double* cke,
+                    double* reaction);
 
 // Releases Model::damping and Model::local_damping when they are zero at every node (the usual
 // case: no damping zone, undamped materials): 16 B per node less, and integrate skips them.

@@ -154,15 +154,13 @@ void spring_full_update(Model& m, const SpringLaw& law, std::int64_t i, std::int
   m.sp_dissipated[s] = sp.dissipated;
 }
 
-// The reference form, one interface at a time: the first call (no previous normal kept) and
-// any spring_points_per_iface other than 2 or 3.
-void spring_forces_generic(Model& m, double dt, double t) {
+// One interface of the reference form. kTied: tied points (Model::sp_tied) are skipped (no
+// force, no update) and the previous normal is always the kept one.
+template <bool kTied>
+inline void spring_interface(Model& m, std::int64_t i, double dt, double t, bool have_old,
+                             bool fe) {
   const int np = m.springs_per_iface;
-  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
-  const bool have_old = m.iface_normal_set;
-  const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < ni; ++i) {
+  {
     const std::int64_t s0 = i * np;
     Vec3 pa[3], pb[3];
     for (int q = 0; q < np; ++q) {
@@ -197,6 +195,9 @@ void spring_forces_generic(Model& m, double dt, double t) {
       const std::int64_t s = s0 + q;
       const std::uint8_t state = m.sp_state[s];
       if (state == kReleased) continue;  // F_n = 0, F_s = 0 since it was released
+      if constexpr (kTied) {
+        if (m.sp_tied[s]) continue;  // a tie: no spring force
+      }
       const auto a = m.sp_a[s], b = m.sp_b[s];
       const Vec3 d = pb[q] - pa[q];
       // Objective increment: remove the part of the relative motion that only carries the
@@ -229,6 +230,27 @@ void spring_forces_generic(Model& m, double dt, double t) {
       spring_full_update(m, law, i, s, d, du, n, n_old, off, t, fe);
     }
   }
+}
+
+// The reference form, one interface at a time: the first call (no previous normal kept) and
+// any spring_points_per_iface other than 2 or 3.
+void spring_forces_generic(Model& m, double dt, double t) {
+  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  const bool have_old = m.iface_normal_set;
+  const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < ni; ++i) spring_interface<false>(m, i, dt, t, have_old, fe);
+  m.iface_normal_set = true;
+}
+
+// Tied mode: the active interfaces only (those with an untied point; their normals are kept
+// from activation on), tied points skipped.
+void spring_forces_tied(Model& m, double dt, double t) {
+  const auto na = static_cast<std::int64_t>(m.active_ifaces.size());
+  const bool fe = !m.sp_w.empty();
+  const std::int32_t* list = m.active_ifaces.data();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = 0; k < na; ++k) spring_interface<true>(m, list[k], dt, t, true, fe);
   m.iface_normal_set = true;
 }
 
@@ -473,6 +495,10 @@ void spring_forces(Model& m, double dt, double t) {
   if (m.iface_normal.size() != m.n_ifaces()) {
     m.iface_normal.assign(m.n_ifaces(), Vec3{});
     m.iface_normal_set = false;
+  }
+  if (m.tied) {
+    spring_forces_tied(m, dt, t);
+    return;
   }
   const bool g0 = !m.sp_g0.empty();
   if (!m.iface_normal_set || (m.springs_per_iface != 2 && m.springs_per_iface != 3)) {

@@ -72,6 +72,7 @@ inline Vec3 spring_force(const Model& m, std::size_t s) {
 // kernels call it for their block right after assigning its forces (block_forces with
 // gather_springs), which saves a pass over f and a parallel region per step.
 inline void add_spring_forces(Model& m, std::int32_t b) {
+  if (m.tied && !m.block_active[b]) return;  // tied mode: only ties at this block, no force
   const std::int32_t n0 = m.block_first_node[b];
   const int nn = m.block_first_node[b + 1] - n0;
   const int np = m.springs_per_iface;

@@ -308,20 +308,8 @@ double triad_bandwidth(std::size_t n, int threads, int reps) {
 
 namespace {
 
-enum Kernel {
-  kPositions,
-  kBlocks,
-  kSprings,
-  kGather,
-  kLoads,
-  kBoundary,
-  kIntegrate,
-  kConstraints,
-  kNumKernels
-};
-constexpr const char* kKernelNames[kNumKernels] = {
-    "update_positions", "block_forces",    "spring_forces", "gather_spring_forces",
-    "explosive_loads",  "boundary_forces", "integrate",     "constraints_and_work"};
+constexpr int kNumKernels = kNumStepKernels;
+constexpr const char* const* kKernelNames = kStepKernelNames;
 
 struct LoopResult {
   int threads = 0;
@@ -355,71 +343,37 @@ std::int64_t broken_springs(const Model& m) {
   return n;
 }
 
-// The kernels of Simulation::step (solver/simulation.cpp) in the same order, each timed.
-LoopResult timed_loop(const Model& snapshot, const BarCharges& bars0, const Boundaries& bc0,
-                      double t0, double dt, int steps, int threads) {
+// `steps` steps of Simulation::step from a copy of the prepared state, each kernel timed
+// (Simulation::set_timer).
+LoopResult timed_loop(const PreparedCase& snapshot, int steps, int threads) {
   omp_set_num_threads(threads);
-  Model m = snapshot;
-  BarCharges bars = bars0;
-  Boundaries bc = bc0;
-  AppliedLoads applied;
-  std::vector<double> dissipated(m.n_blocks(), 0.0);
-  double t = t0, w_explosive = 0, w_boundary = 0, w_absorbed = 0;
-  std::int64_t inverted = 0;
+  PreparedCase pc = snapshot;
+  pc.sim.clear_loads();
+  add_charge_loads(pc);  // bound to this copy's charges
   LoopResult r;
   r.threads = threads;
-  auto one_step = [&](bool timed) {
-    double c0 = omp_get_wtime(), c1;
-    auto lap = [&](Kernel k) {
-      c1 = omp_get_wtime();
-      if (timed) r.k[k] += c1 - c0;
-      c0 = c1;
-    };
-    update_positions(m, dt);
-    lap(kPositions);
-    // As Simulation::step: springs first, then the block kernels with the gather fused in
-    // (the gather_spring_forces row stays, at ~0: its work is in block_forces).
-    spring_forces(m, dt, t);
-    lap(kSprings);
-    std::int32_t first = -1;
-    inverted += block_forces(m, &first, /*gather_springs=*/true);
-    lap(kBlocks);
-    lap(kGather);
-    applied.clear();
-    if (!bars.empty()) bar_loads(m, bars, applied, t);
-    lap(kLoads);
-    boundary_forces(m, bc, t);
-    lap(kBoundary);
-    integrate(m, bc.gravity, dt, dissipated.data(), nullptr);
-    lap(kIntegrate);
-    w_boundary += apply_constraints(m, bc, t + 0.5 * dt, dt);
-    for (std::size_t i = 0; i < applied.node.size(); ++i)
-      w_explosive += dot(applied.force[i], 0.5 * (applied.v_old[i] + m.v[applied.node[i]])) * dt;
-    double absorbed = 0;
-    w_boundary += load_work(m, bc, dt, &absorbed);
-    w_absorbed += absorbed;
-    lap(kConstraints);
-    t += dt;
-  };
+  StepTimes times;
   // Two untimed steps: first touch of the copies by this thread count, warm caches.
-  one_step(false);
-  one_step(false);
+  pc.sim.step();
+  pc.sim.step();
+  pc.sim.set_timer(&times);
   const double w0 = omp_get_wtime(), cpu0 = process_cpu_seconds();
-  for (int s = 0; s < steps; ++s) one_step(true);
+  for (int s = 0; s < steps; ++s) {
+    pc.sim.step();
+    r.inverted += pc.sim.inverted_blocks();
+  }
   r.wall = omp_get_wtime() - w0;
   r.cpu = process_cpu_seconds() - cpu0;
-  r.broken_end = broken_springs(m);
-  r.inverted = inverted;
-  r.work = w_boundary + w_explosive + w_absorbed;
+  r.k = times.s;
+  r.broken_end = broken_springs(pc.sim.model());
   return r;
 }
 
 // Best (smallest wall time) of `reps` runs.
-LoopResult best_loop(const Model& snapshot, const BarCharges& bars, const Boundaries& bc, double t0,
-                     double dt, int steps, int threads, int reps) {
+LoopResult best_loop(const PreparedCase& snapshot, int steps, int threads, int reps) {
   LoopResult best;
   for (int i = 0; i < reps; ++i) {
-    LoopResult r = timed_loop(snapshot, bars, bc, t0, dt, steps, threads);
+    LoopResult r = timed_loop(snapshot, steps, threads);
     if (i == 0 || r.wall < best.wall) best = r;
   }
   return best;
@@ -466,22 +420,14 @@ int run_bench(const BenchOptions& opt) {
   const double warm_s = omp_get_wtime() - warm0;
 
   // Timed runs, each from the same post-warm-up state: 1 and 2 threads (and `threads`).
-  const Model snapshot = sim.model();
-  const Boundaries bc = prepare_boundaries(snapshot, c);
+  const Model& snapshot = sim.model();
   const double t0 = sim.time(), dt = sim.dt();
   const double polar_it = bench::mean_polar_iterations(snapshot);
   constexpr int kReps = 3;
-  const LoopResult r1 = best_loop(snapshot, bars, bc, t0, dt, steps, 1, kReps);
-  const LoopResult r2 = best_loop(snapshot, bars, bc, t0, dt, steps, 2, kReps);
+  const LoopResult r1 = best_loop(pc, steps, 1, kReps);
+  const LoopResult r2 = best_loop(pc, steps, 2, kReps);
   LoopResult rm = threads == 1 ? r1 : r2;
-  if (threads != 1 && threads != 2)
-    rm = best_loop(snapshot, bars, bc, t0, dt, steps, threads, kReps);
-
-  // The real Simulation::step on the same state and thread count, for comparison.
-  omp_set_num_threads(threads);
-  const double s0 = omp_get_wtime();
-  for (int s = 0; s < steps; ++s) sim.step();
-  const double sim_wall = omp_get_wtime() - s0;
+  if (threads != 1 && threads != 2) rm = best_loop(pc, steps, threads, kReps);
 
   // Memory bandwidth: triad over 3 x 80 MB, 2 threads, best of 5.
   const std::size_t triad_n = 10'000'000;
@@ -500,7 +446,6 @@ int run_bench(const BenchOptions& opt) {
   const double speedup = r1.wall / r2.wall;
   const double step_gbs = bytes.total() / step_s / 1e9;
   const double solver_extra = static_cast<double>(sim.solver_bytes());
-  const double sim_ns_block = sim_wall / (nb * steps) * 1e9;
   const double load1 = load_average();
   // CPU time / (wall time x threads): below 1 when the process did not have its cores (a busy
   // machine); the 1-thread CPU time per block-step is then the more trustworthy cost figure.
@@ -525,7 +470,7 @@ int run_bench(const BenchOptions& opt) {
             "\"broken_at_start\": {}, \"broken_at_end\": {}, \"ns_per_block_step\": {:.4g}, "
             "\"block_steps_per_s\": {:.4g}, \"spring_steps_per_s\": {:.4g}, "
             "\"ns_per_block_step_1_thread\": {:.4g}, \"ns_per_block_step_2_threads\": {:.4g}, "
-            "\"speedup_2_threads\": {:.4g}, \"simulation_step_ns_per_block\": {:.4g}, "
+            "\"speedup_2_threads\": {:.4g}, "
             "\"bytes_per_block\": {:.1f}, \"bytes_per_block_with_solver\": {:.1f}, "
             "\"triad_gb_s\": {:.4g}, \"triad_ws_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
             "\"step_gb_s_estimate\": {:.4g}, \"bandwidth_fraction\": {:.4g}, "
@@ -535,7 +480,7 @@ int run_bench(const BenchOptions& opt) {
             "\"load_average\": [{:.2f}, {:.2f}], \"kernels\": {{{}}}}}",
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
             warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
-            r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup, sim_ns_block,
+            r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup,
             static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
             cpu_ns_block_1, share1, share2, load0, load1, kernels)
@@ -570,8 +515,7 @@ int run_bench(const BenchOptions& opt) {
   out += fmt::format("  block-steps/s          {:.4g}\n", block_rate);
   out += fmt::format("  spring-point-steps/s   {:.4g}\n", spring_rate);
   out += fmt::format("  ns per block-step      {:.1f}   (target 40 on 2 threads)\n", ns_block);
-  out += fmt::format("  Simulation::step       {:.1f} ns per block-step (same state, one run)\n\n",
-                     sim_ns_block);
+  out += "\n";
   double ksum1 = 0;
   for (double k : r1.k) ksum1 += k;
   out += fmt::format("kernel split ({} thread{}; last column: the 1-thread run):\n", threads,

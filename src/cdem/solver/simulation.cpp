@@ -1,6 +1,7 @@
 #include "cdem/solver/simulation.hpp"
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +11,8 @@
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
+#include "cdem/physics/tie_failure.hpp"
+#include "cdem/physics/ties.hpp"
 
 namespace cdem {
 
@@ -32,7 +35,23 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
       for (double v : s0) zero = zero && v == 0;
     if (zero) std::vector<Sym6>().swap(m_.stress0);
   }
-  stable_ = stable_time_step(m_, c.dt_safety);
+  if (c.interface_mode == InterfaceMode::Tied) {
+    build_ties(m_);
+    stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
+    opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_);
+    const std::size_t nv = m_.n_vertices();
+    vtx_ke_.assign(nv, 0.0);
+    vtx_reaction_.assign(2 * nv, 0.0);
+    vtx_con_.assign(nv, 0);
+    for (const auto& cn : bc_.constraints) vtx_con_[m_.node_vertex[cn.node]] = 1;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (vtx_con_[v]) con_vertices_.push_back(static_cast<std::int32_t>(v));
+    if (!m_.damping.empty() || !m_.local_damping.empty()) vtx_dissipated_.assign(nv, 0.0);
+    if (!m_.damping.empty() || !m_.local_damping.empty()) vtx_cke_.assign(nv, 0.0);
+    tie_flag_.assign(m_.n_ifaces(), 0);
+  } else {
+    stable_ = stable_time_step(m_, c.dt_safety);
+  }
   fixed_dt_ = c.fixed_dt;
   case_path_ = c.path;
   dt_ = stable_.dt;
@@ -47,15 +66,22 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     throw InputError(fmt::format("{}: no finite stable time step (a model without blocks?)", c.path));
   // Per block (integrate.hpp); the dissipation and c ke only for a damped model.
   const bool damped = !m_.damping.empty() || !m_.local_damping.empty();
-  if (damped) block_dissipated_.assign(m_.n_blocks(), 0.0);
-  if (!m_.damping.empty()) cke_.assign(m_.n_blocks(), 0.0);
-  ke_.assign(m_.n_blocks(), 0.0);
+  if (!m_.tied) {  // (tied mode: per vertex, above)
+    if (damped) block_dissipated_.assign(m_.n_blocks(), 0.0);
+    if (damped) cke_.assign(m_.n_blocks(), 0.0);
+    ke_.assign(m_.n_blocks(), 0.0);
+  }
   // Forces at t = 0 (block stresses for output before the first step).
   block_forces(m_, nullptr);
   // An initial velocity field counts as initial (kinetic) energy.
-  for (std::size_t b = 0; b < m_.n_blocks(); ++b)
+  for (std::size_t b = 0; b < ke_.size(); ++b)
     for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n)
       ke_[b] += 0.5 * m_.mass[n] * dot(m_.v[n], m_.v[n]);
+  for (std::size_t v = 0; v < vtx_ke_.size(); ++v)
+    for (auto k = m_.vtx_offset[v]; k < m_.vtx_offset[v + 1]; ++k) {
+      const auto n = m_.vtx_nodes[k];
+      vtx_ke_[v] += 0.5 * m_.mass[n] * dot(m_.v[n], m_.v[n]);
+    }
   e_initial_ = energy().mechanical();
 }
 
@@ -149,7 +175,9 @@ void Simulation::setup_initial_stress(const Case& c) {
     m_.stress0[b] = stress_at(centroid[b]);
     m_.stress[b] = m_.stress0[b];
   }
-  // Pre-load the springs with the traction of the mean stress of their two blocks.
+  // Pre-load the springs with the traction of the mean stress of their two blocks (springs
+  // mode; a tie carries it through the blocks' stress).
+  if (c.interface_mode == InterfaceMode::Tied) return;
   const int np = m_.springs_per_iface;
   m_.sp_g0.assign(m_.n_springs(), 0.0);
   for (std::size_t i = 0; i < m_.n_ifaces(); ++i) {
@@ -178,42 +206,79 @@ void Simulation::setup_initial_stress(const Case& c) {
 }
 
 void Simulation::step(bool sample) {
+  double clock = timer_ ? omp_get_wtime() : 0.0;
+  auto lap = [&](StepKernel k) {
+    if (!timer_) return;
+    const double now = omp_get_wtime();
+    timer_->s[k] += now - clock;
+    clock = now;
+  };
   // 1. positions x(n) = x(n-1) + dt v(n-1/2)
   update_positions(m_, dt_);
-  // 2. spring forces (on x(n), independent of the block forces)
+  lap(kStepPositions);
+  // 2. spring forces (on x(n), independent of the block forces; tied mode: untied points only)
   spring_forces(m_, dt_, t_);
+  lap(kStepSprings);
   // 3. block forces (assign f), each block adding its nodes' spring forces right after
   std::int32_t first = -1;
   const auto inv = block_forces(m_, &first, /*gather_springs=*/true);
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
-  // 4. (general contact: not yet) 5. explosive and other loads
+  lap(kStepBlocks);
+  // 4. tied mode: ties broken by the blocks' traction are untied (their force added to f)
+  if (m_.tied) w_insert_ += tie_failure(m_, t_, tie_flag_);
+  lap(kStepTies);
+  // 5. (general contact: not yet) 6. explosive and other loads
   applied_.clear();
   for (auto& h : loads_) h(m_, applied_, t_);
-  // 6. boundary loads (pressure, dashpots)
+  lap(kStepLoads);
+  // 7. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
-  // 7. integration with gravity and damping
-  integrate(m_, bc_.gravity, dt_, block_dissipated_.data(), sample ? ke_.data() : nullptr,
-            cke_.empty() ? nullptr : cke_.data());
-  // 8. velocity constraints (prescribed at the mid-step time)
-  // Works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt: they run half a step ahead of the
-  // state at t_n (energy() takes the second half back out, see last_*_).
-  last_boundary_ = apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_);
+  lap(kStepBoundary);
+  // 8. integration with gravity and damping, then the velocity constraints (prescribed at the
+  // mid-step time); tied mode: one velocity per cluster, constrained as a whole.
+  double step_boundary = 0;
+  if (m_.tied) {
+    integrate_tied(m_, bc_, dt_, t_ + 0.5 * dt_, vtx_con_.data(), vtx_dissipated_.data(),
+                   sample ? vtx_ke_.data() : nullptr, vtx_cke_.empty() ? nullptr : vtx_cke_.data(),
+                   vtx_reaction_.data());
+    lap(kStepIntegrate);
+    last_boundary_ = 0;
+    for (auto v : con_vertices_) {
+      step_boundary += vtx_reaction_[2 * v];
+      last_boundary_ += vtx_reaction_[2 * v + 1];
+    }
+  } else {
+    integrate(m_, bc_.gravity, dt_, block_dissipated_.data(), sample ? ke_.data() : nullptr,
+              cke_.empty() ? nullptr : cke_.data());
+    lap(kStepIntegrate);
+    step_boundary = apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_, &last_boundary_);
+  }
+  // 9. the works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt, and their parts after t_n
+  // (energy() takes those back out, see last_*_)
+  double step_explosive = 0;
   last_explosive_ = 0;
-  for (std::size_t i = 0; i < applied_.node.size(); ++i)
-    last_explosive_ += dot(applied_.force[i], 0.5 * (applied_.v_old[i] + m_.v[applied_.node[i]])) * dt_;
-  last_absorbed_ = 0;
-  last_boundary_ += load_work(m_, bc_, dt_, &last_absorbed_);
-  w_boundary_ += last_boundary_;
-  w_explosive_ += last_explosive_;
-  w_absorbed_ += last_absorbed_;
+  for (std::size_t i = 0; i < applied_.node.size(); ++i) {
+    const Vec3 v1 = m_.v[applied_.node[i]];
+    step_explosive += dot(applied_.force[i], 0.5 * (applied_.v_old[i] + v1)) * dt_;
+    last_explosive_ += 0.5 * dt_ * dot(applied_.force[i], v1);
+  }
+  double step_absorbed = 0, load_after = 0;
+  step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
+  last_boundary_ += load_after;
+  w_boundary_ += step_boundary;
+  w_explosive_ += step_explosive;
+  w_absorbed_ += step_absorbed;
   t_ += dt_;
   ++steps_;
+  lap(kStepWork);
 }
 
 std::size_t Simulation::solver_bytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  std::size_t b = bytes(block_dissipated_) + bytes(ke_) + bytes(cke_) + bytes(applied_.node) +
+  std::size_t b = bytes(block_dissipated_) + bytes(ke_) + bytes(cke_) + bytes(vtx_dissipated_) +
+                  bytes(vtx_ke_) + bytes(vtx_cke_) + bytes(vtx_reaction_) + bytes(vtx_con_) +
+                  bytes(con_vertices_) + bytes(tie_flag_) + bytes(applied_.node) +
                   bytes(applied_.force) + bytes(applied_.v_old);
   b += bytes(bc_.constraints) + bytes(bc_.loads) + bytes(bc_.tables) + bytes(bc_.work_nodes) +
        bytes(bc_.v_old) + bytes(bc_.node_load_offset) +
@@ -223,7 +288,12 @@ std::size_t Simulation::solver_bytes() const {
 
 EnergyBalance Simulation::energy() const {
   EnergyBalance e;
-  for (double k : ke_) e.kinetic += k;
+  if (m_.tied) {
+    for (double k : vtx_ke_) e.kinetic += k;
+    for (double d : vtx_dissipated_) e.damping += d;
+  } else {
+    for (double k : ke_) e.kinetic += k;
+  }
   for (double s : m_.strain_energy) e.block_strain += s;
   for (std::size_t s = 0; s < m_.n_springs(); ++s) {
     if (m_.sp_state[s] == kReleased) continue;
@@ -237,18 +307,23 @@ EnergyBalance Simulation::energy() const {
   for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
     e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n));
   }
-  // The accumulated works include all of the last step, [t_n - dt/2, t_n + dt/2]; the state is
-  // at t_n, so half of the last step's increment is taken back out (exact to O(dt^2) per step,
-  // not accumulated). Viscous damping of the last step: c m |v_mid|^2 dt = 2 c ke dt.
+  // The accumulated works include all of the last step, F(n) . v_mid dt with
+  // v_mid dt = (x(n+1) - x(n-1)) / 2; the state is at t_n (x(n), and the kinetic energy
+  // 1/2 m v(n-1/2).v(n+1/2)), so the part after t_n, F(n) . v(n+1/2) dt / 2 (last_*_), is taken
+  // back out. With the leapfrog kinetic energy this makes the balance exact for a linear
+  // system under any loads (docs/theory.md "Energy balance"): by summation by parts the
+  // central-difference scheme conserves E*(n) - sum_k<n F(k) . v_mid(k) dt - F(n) . v(n-1/2) dt/2.
   double last_damping = 0;
   if (steps_ > 0)
-    for (double ck : cke_) last_damping += 2.0 * ck * dt_;
-  e.damping += w_absorbed_ - 0.5 * (last_absorbed_ + last_damping);
-  e.external_work = w_boundary_ - 0.5 * last_boundary_;
-  e.explosive_work = w_explosive_ - 0.5 * last_explosive_;
+    for (double ck : (m_.tied ? vtx_cke_ : cke_)) last_damping += ck;
+  e.damping += w_absorbed_ - last_absorbed_ - last_damping;
+  e.external_work = w_boundary_ - last_boundary_;
+  e.explosive_work = w_explosive_ - last_explosive_;
   e.initial = e_initial_;
+  e.insertion = w_insert_;
   const double stored = e.mechanical() + e.damping + e.fracture;
-  const double input = e.initial + e.external_work + e.gravity_work + e.explosive_work;
+  const double input =
+      e.initial + e.external_work + e.gravity_work + e.explosive_work + e.insertion;
   e.balance = stored - input;
   const double scale = std::max({std::abs(input), e.mechanical(), 1e-300});
   e.error = std::abs(e.balance) / scale;

@@ -2,6 +2,7 @@
 // block forces, spring forces, gather, explosive loads, boundary loads, integration with
 // gravity and damping, velocity constraints), plus the energy book-keeping (SPEC 4).
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 #include "cdem/physics/boundaries.hpp"
+#include "cdem/physics/ties.hpp"
 #include "cdem/solver/time_step.hpp"
 
 namespace cdem {
@@ -24,6 +26,8 @@ struct EnergyBalance {
   double damping = 0;          // viscous + local damping + non-reflecting boundary absorption
   double fracture = 0;         // dissipated at spring points (breaking, softening, friction)
   double initial = 0;          // stored energy at t = 0 (pre-stressed springs)
+  double insertion = 0;        // tied mode: elastic energy of the springs of untied points at
+                               // the moment they were untied (tie_failure.hpp)
   // balance = (stored + dissipated) - (initial + work in); error = |balance| / scale
   double balance = 0, error = 0;
   double mechanical() const { return kinetic + block_strain + spring_strain; }
@@ -52,6 +56,25 @@ struct AppliedLoads {
 // plug in here): it adds its forces through AppliedLoads at time t.
 using LoadHook = std::function<void(Model&, AppliedLoads&, double t)>;
 
+// The kernels of Simulation::step in their order, for timing (cdemblast bench).
+enum StepKernel {
+  kStepPositions,
+  kStepSprings,
+  kStepBlocks,
+  kStepTies,
+  kStepLoads,
+  kStepBoundary,
+  kStepIntegrate,
+  kStepWork,
+  kNumStepKernels
+};
+constexpr const char* kStepKernelNames[kNumStepKernels] = {
+    "update_positions", "spring_forces",   "block_forces", "tie_failure",
+    "explosive_loads",  "boundary_forces", "integrate",    "constraints_and_work"};
+struct StepTimes {
+  std::array<double, kNumStepKernels> s{};  // wall seconds per kernel, summed over the steps
+};
+
 class Simulation {
  public:
   Simulation(Model model, const Case& c);
@@ -67,6 +90,10 @@ class Simulation {
   const StableStep& stable() const { return stable_; }
   std::int64_t inverted_blocks() const { return inverted_; }
   std::int32_t first_inverted() const { return first_inverted_; }
+  // Tied mode: omega_max^2 of the blocks (1/s^2) and the opened points' stiffness relative to
+  // the springs mode's E / h (min, median).
+  double omega2_max() const { return omega2_max_; }
+  const OpenedStiffness& opened_stiffness() const { return opened_; }
 
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
   EnergyBalance energy() const;
@@ -76,6 +103,10 @@ class Simulation {
   std::size_t solver_bytes() const;
 
   void add_load(LoadHook hook) { loads_.push_back(std::move(hook)); }
+  // Drops the load hooks (a copied Simulation re-adds hooks bound to its own charges).
+  void clear_loads() { loads_.clear(); }
+  // With a non-null `t`, step() adds the wall time of each kernel to it.
+  void set_timer(StepTimes* t) { timer_ = t; }
   // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it. With a
   // fixed time step (simulation.dt) above dt_max, throws InputError naming the key.
   void limit_dt(double dt_max, const std::string& what);
@@ -88,6 +119,7 @@ class Simulation {
   Boundaries bc_;
   StableStep stable_;
   std::vector<LoadHook> loads_;
+  StepTimes* timer_ = nullptr;
   AppliedLoads applied_;
   double t_ = 0, dt_ = 0;
   double fixed_dt_ = 0;     // simulation.dt, 0 when the stable step is used
@@ -96,8 +128,16 @@ class Simulation {
   std::int64_t inverted_ = 0;
   std::int32_t first_inverted_ = -1;
   std::vector<double> block_dissipated_, ke_, cke_;  // per block (integrate.hpp)
+  // Tied mode: per vertex (integrate_tied) and the constrained vertices; the failure flags.
+  std::vector<double> vtx_dissipated_, vtx_ke_, vtx_cke_, vtx_reaction_;
+  std::vector<std::uint8_t> vtx_con_;
+  std::vector<std::int32_t> con_vertices_;
+  std::vector<std::uint8_t> tie_flag_;
+  double w_insert_ = 0, omega2_max_ = 0;
+  OpenedStiffness opened_;
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
-  double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;  // increments of the last step
+  // The parts after t_n of the last step's works, F(n) . v(n+1/2) dt / 2 (energy())
+  double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;
 };
 
 }  // namespace cdem

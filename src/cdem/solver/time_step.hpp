@@ -21,4 +21,19 @@ struct StableStep {
 
 StableStep stable_time_step(const Model& m, double safety);
 
+// The largest eigenvalue omega_e^2 of M_e^-1 K_e of block b (1/s^2): its linear stiffness at the
+// reference configuration, K_e = sum over integration points w_q B^T D B (the kernels' Lame
+// constants and reference gradients), with its lumped nodal masses M_e. The free element's
+// highest frequency.
+double block_omega2(const Model& m, std::size_t b);
+
+// Tied mode (physics/ties.hpp): by the element eigenvalue theorem (Irons; Hughes, The Finite
+// Element Method, 2000, sec. 9.3), the assembled system of the clusters (whose masses are sums
+// of the blocks' lumped masses) has omega_max^2 <= max_e omega_e^2 over the elastic blocks, so
+// central differences are stable for dt <= 2 / omega_max (dt_block). The opened points' springs
+// take at most the share eta of omega_max^2 (set_opened_stiffness), so
+//   dt = safety * 2 / (omega_max sqrt(1 + eta))      (dt_spring reports 2 / (omega_max sqrt(eta))).
+// `omega2_max` returns omega_max^2.
+StableStep stable_time_step_tied(const Model& m, double safety, double eta, double* omega2_max);
+
 }  // namespace cdem

@@ -1,0 +1,116 @@
+#include "cdem/physics/tie_failure.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "cdem/mesh/element_geometry.hpp"
+#include "cdem/physics/ties.hpp"
+
+namespace cdem {
+namespace {
+
+struct FaceTraction {
+  Vec3 n;       // unit normal, A to B
+  double tn;    // t . n (Pa), tension positive
+  Vec3 ts;      // tangential traction (Pa)
+};
+
+FaceTraction face_traction(const Model& m, std::int64_t i) {
+  const int np = m.springs_per_iface;
+  const std::int64_t s0 = i * np;
+  Vec3 pa[3], pb[3];
+  for (int q = 0; q < np; ++q) {
+    pa[q] = m.x[m.sp_a[s0 + q]];
+    pb[q] = m.x[m.sp_b[s0 + q]];
+  }
+  const Vec3 av = face_area_vector(std::span<const Vec3>(pa, np), np) +
+                  face_area_vector(std::span<const Vec3>(pb, np), np);
+  const double a2 = dot(av, av);
+  const Vec3 n = a2 > 0 ? (1.0 / std::sqrt(a2)) * av : Vec3{};
+  const Sym6& sa = m.stress[m.iface_block_a[i]];
+  const Sym6& sb = m.stress[m.iface_block_b[i]];
+  // Sym6: xx, yy, zz, xy, yz, xz
+  const double xx = 0.5 * (sa[0] + sb[0]), yy = 0.5 * (sa[1] + sb[1]), zz = 0.5 * (sa[2] + sb[2]);
+  const double xy = 0.5 * (sa[3] + sb[3]), yz = 0.5 * (sa[4] + sb[4]), xz = 0.5 * (sa[5] + sb[5]);
+  const Vec3 t{xx * n.x + xy * n.y + xz * n.z, xy * n.x + yy * n.y + yz * n.z,
+               xz * n.x + yz * n.y + zz * n.z};
+  const double tn = dot(t, n);
+  return {n, tn, t - tn * n};
+}
+
+inline void cap(Vec3& fs, double c) {
+  const double mag = norm(fs);
+  if (mag > c) fs *= (c > 0 ? c / mag : 0.0);
+}
+
+}  // namespace
+
+std::uint8_t tie_strength_exceeded(const SpringLaw& law, double fn, double fs2, double area) {
+  switch (law.law) {
+    case InterfaceLaw::Elastic: return kModeNone;
+    case InterfaceLaw::MohrCoulomb:
+    case InterfaceLaw::FractureEnergy: {
+      if (fn >= law.ft * area) return kModeTension;
+      const double tau = law.c * area - fn * law.tan_phi;
+      if (tau <= 0 || fs2 >= tau * tau) return kModeShear;
+      return kModeNone;
+    }
+  }
+  return kModeNone;
+}
+
+double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
+  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  const int np = m.springs_per_iface;
+  if (flag.size() != static_cast<std::size_t>(ni)) flag.assign(ni, 0);
+  std::int64_t failed = 0;
+#pragma omp parallel for schedule(static) reduction(+ : failed)
+  for (std::int64_t i = 0; i < ni; ++i) {
+    if (!m.iface_check[i]) continue;
+    const FaceTraction tr = face_traction(m, i);
+    const double area = m.sp_area.v[i];
+    const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+    const std::uint8_t mode =
+        tie_strength_exceeded(law, tr.tn * area, dot(tr.ts, tr.ts) * area * area, area);
+    flag[i] = mode;
+    failed += mode != kModeNone;
+  }
+  if (failed == 0) return 0.0;
+  double insertion = 0;
+  for (std::int64_t i = 0; i < ni; ++i) {
+    if (flag[i] == kModeNone) continue;
+    const std::uint8_t mode = flag[i];
+    flag[i] = kModeNone;
+    const FaceTraction tr = face_traction(m, i);
+    const double area = m.sp_area.v[i], kn = m.sp_kn.v[i], ks = m.sp_ks.v[i];
+    const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+    for (int q = 0; q < np; ++q) {
+      const std::size_t s = static_cast<std::size_t>(i) * np + q;
+      if (!m.sp_tied[s]) continue;
+      double fn = tr.tn * area;
+      Vec3 fs = area * tr.ts;
+      if (law.law == InterfaceLaw::MohrCoulomb) {
+        m.sp_state[s] = kBroken;
+        m.sp_mode[s] = mode;
+        m.sp_break_time[s] = static_cast<float>(t);
+        fn = std::min(0.0, fn);
+        cap(fs, -fn * law.tan_phi_r);
+      } else {  // fracture energy: a cohesive point at its peak strength, zero opening
+        fn = std::min(fn, law.ft * area);
+        cap(fs, std::max(0.0, law.c * area - fn * law.tan_phi));
+      }
+      m.sp_fn[s] = fn;
+      m.sp_fs[s] = fs;
+      m.sp_g0[s] = kn > 0 ? fn / kn : 0.0;
+      insertion += 0.5 * fn * fn / kn + 0.5 * dot(fs, fs) / ks;
+      untie_point(m, s);
+      m.iface_normal[i] = tr.n;
+      const Vec3 f = fn * tr.n + fs;
+      m.f[m.sp_a[s]] += f;
+      m.f[m.sp_b[s]] -= f;
+    }
+  }
+  return insertion;
+}
+
+}  // namespace cdem

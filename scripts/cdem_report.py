@@ -856,6 +856,7 @@ ENERGY_TERMS = [
     ("damping", "damping + absorbed", "tab:purple", "-."),
     ("fracture", "fracture dissipation", "tab:brown", "-."),
     ("initial", "initial stored", "0.6", ":"),
+    ("insertion", "opened points at insertion (input)", "tab:olive", ":"),
 ]
 
 
@@ -904,8 +905,8 @@ def plot_energy(runs, out_dir, written):
         fig.suptitle(f"Energy balance: {r.label}")
         return save(fig, out_dir, "energy.png", written)
     groups = [("kinetic", ["kinetic"]), ("strain (blocks + springs)", ["block_strain", "spring_strain"]),
-              ("work input (external + gravity + explosive)",
-               ["external_work", "gravity_work", "explosive_work"]),
+              ("work input (external + gravity + explosive + insertion)",
+               ["external_work", "gravity_work", "explosive_work", "insertion"]),
               ("damping + absorbed", ["damping"]), ("fracture dissipation", ["fracture"])]
     vmax = 1.0
     series = {}

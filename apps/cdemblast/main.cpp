@@ -19,6 +19,7 @@
 #include "cdem/io/case.hpp"
 #include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
+#include "cdem/physics/ties.hpp"
 #include "cdem/solver/simulation.hpp"
 
 namespace {
@@ -44,8 +45,21 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   fmt::print("\nface sets  ");
   for (const auto& f : m.facet_sets) fmt::print(" {}({})", f.name, f.facets.size());
   fmt::print("\n");
-  fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",
-             sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety);
+  if (m.tied) {
+    const auto& os = sim.opened_stiffness();
+    fmt::print("interfaces  tied: intact points tie their nodes ({} clusters of {} vertices); opened "
+               "points k_n = {:.3g} to {:.3g} (median) x E/h, taking {} of the blocks' stability "
+               "limit\n",
+               cdem::count_clusters(m), m.n_vertices(), os.ratio_min, os.ratio_median,
+               c.opened_stiffness);
+    fmt::print("dt          {:.4g} s, limited by the {} (element eigenvalue bound 2/omega_max "
+               "{:.4g} s, x 1/sqrt(1 + {}) for opened points, safety {})\n",
+               sim.dt(), st.limit, st.dt_block, c.opened_stiffness, c.dt_safety);
+  } else {
+    fmt::print("interfaces  springs (SPEC 1.3): every interface a spring from t = 0\n");
+    fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",
+               sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety);
+  }
   for (const auto& b : bars.bars)
     fmt::print("bar         hole '{}' deck {}: {:.4g} m, {} segments of {:.4g} m, starts at t = {:.4g} s\n",
                b.hole, b.deck + 1, b.length, b.seg_end - b.seg_begin, b.h, b.t0);

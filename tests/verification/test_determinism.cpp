@@ -1,6 +1,7 @@
 // Thread-count independence (ARCHITECTURE "How the hot loop is written"): a cracking run gives
 // bitwise identical node positions, velocities, forces, block stresses and spring-point states
-// for 1 and 2 OpenMP threads (no atomics; spring forces gathered per node in a fixed order).
+// for 1 and 2 OpenMP threads (no atomics; spring forces gathered per node in a fixed order), in
+// both interface modes (tied: also the clusters, the untied points and the active interfaces).
 // Two runs: the shipped 2D example (plate with a pressurised hole, Mohr-Coulomb interfaces,
 // non-reflecting sides) on a coarser generated mesh, and an in-code 3D tet box with
 // fracture-energy interfaces spalled by a pressure pulse on its top face.
@@ -59,11 +60,17 @@ Snapshot run_with_threads(const Model& model, const Case& c, int threads, std::i
   add(s, "sp_mode", m.sp_mode);
   add(s, "sp_break_time", m.sp_break_time);
   add(s, "sp_dissipated", m.sp_dissipated);
+  add(s, "sp_g0", m.sp_g0);
+  add(s, "sp_tied", m.sp_tied);
+  add(s, "vtx_nodes", m.vtx_nodes);
+  add(s, "vtx_run", m.vtx_run);
+  add(s, "active_ifaces", m.active_ifaces);
   const EnergyBalance e = sim.energy();
   add(s, "energy",
       std::vector<double>{e.kinetic, e.block_strain, e.spring_strain, e.external_work, e.damping,
-                          e.fracture});
-  for (auto st : m.sp_state) s.broken += st != kIntact;
+                          e.fracture, e.insertion, e.explosive_work});
+  for (std::size_t k = 0; k < m.n_springs(); ++k)
+    s.broken += m.sp_state[k] != kIntact || (m.tied && !m.sp_tied[k]);
   s.steps = sim.steps();
   s.time = sim.time();
   return s;
@@ -79,7 +86,11 @@ void expect_identical(const Snapshot& a, const Snapshot& b, const std::string& w
   }
 }
 
-void check_threads(const Model& model, const Case& c, std::int64_t steps, const char* what) {
+void check_threads(const Model& model, Case c, std::int64_t steps, const char* what_mode) {
+  for (InterfaceMode mode : {InterfaceMode::Tied, InterfaceMode::Springs}) {
+    c.interface_mode = mode;
+    const std::string w = std::string(what_mode) + " [" + name_of(mode) + "]";
+    const char* what = w.c_str();
   const Snapshot s1 = run_with_threads(model, c, 1, steps);
   std::printf(
       "[determinism] %s: %zu blocks, %zu spring points, %lld steps to t = %.3e s, %lld "
@@ -90,6 +101,7 @@ void check_threads(const Model& model, const Case& c, std::int64_t steps, const 
   EXPECT_GT(s1.broken, 0) << what;
   const Snapshot s2 = run_with_threads(model, c, 2, steps);
   expect_identical(s1, s2, std::string(what) + ", 1 vs 2 threads");
+  }
 }
 
 TEST(Determinism, PlateWithHole2DThreads) {

@@ -306,7 +306,14 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
     for (auto s = s0; s < s1; ++s) pbar += bc.seg_p[bc.elem_seg[s]];
     pbar /= (s1 - s0);                                                      // eq. 14
     bc.elem_sigma[i] = pbar * bc.elem_atten[i];                             // eq. 15
-    if (bc.elem_sigma[i] > 0) inflate_block(m, bc.elem_block[i], bc.elem_sigma[i], out);  // eq. 16
+    if (bc.elem_sigma[i] > 0) {
+      const auto b = bc.elem_block[i];
+      inflate_block(m, b, bc.elem_sigma[i], out);                           // eq. 16
+      // The block's total stress: its rock skeleton's plus the products' pressure on its faces,
+      // sigma - sigma_b I (as a solid charge's block reports -p I). The traction a tied face
+      // transmits (tie_failure) and the outputs see it; the dynamics are the nodal forces above.
+      for (int k = 0; k < 3; ++k) m.stress[b][k] -= bc.elem_sigma[i];
+    }
   }
 }
 

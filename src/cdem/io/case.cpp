@@ -321,7 +321,7 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   c.interface_mode = sim->choice("interfaces", {"tied", "springs"}, "tied") == "tied"
                      ? InterfaceMode::Tied
                      : InterfaceMode::Springs;
-  c.opened_stiffness = sim->positive("opened_stiffness", 0.25);
+  c.opened_stiffness = sim->positive("opened_stiffness", 1.0);
   if (c.opened_stiffness > 4.0)
     throw InputError(fmt::format("{}: expected a value in (0, 4], got {} (the opened points' share "
                                  "of the blocks' stability limit; dt shrinks by 1 / sqrt(1 + it))",

@@ -127,7 +127,7 @@ struct Case {
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   std::int64_t max_steps = 0;           // 0: unlimited
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
-  double opened_stiffness = 0.25;       // tied: opened points' share eta of the blocks' omega_max^2
+  double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2
 
   Vec3 gravity{};
   std::vector<BlockMaterial> materials;

@@ -182,6 +182,12 @@ void untie_point(Model& m, std::size_t s) {
   split_vertex(m, m.node_vertex[m.sp_a[s]]);
 }
 
+std::size_t count_clusters(const Model& m) {
+  std::size_t n = 0;
+  for (auto r : m.vtx_run) n += r;
+  return n;
+}
+
 OpenedStiffness set_opened_stiffness(Model& m, double eta, double omega2_max) {
   const int np = m.springs_per_iface;
   std::vector<std::int32_t> count(m.n_nodes(), 0);

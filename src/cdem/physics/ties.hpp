@@ -54,6 +54,9 @@ void activate_interface(Model& m, std::int32_t i);
 // time step never has to change when clusters split. Returns the ratio of the chosen k_n to the
 // springs mode's E / h (the penetration under a normal stress sigma is sigma h / (ratio E)):
 // its minimum and median over the interfaces.
+// The number of clusters (one per run of the vertex node lists).
+std::size_t count_clusters(const Model& m);
+
 struct OpenedStiffness {
   double ratio_min = 0, ratio_median = 0;
 };

@@ -66,7 +66,7 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
                        t, sim.steps(), worst, describe_node(m, worst));
   }
   const double input = std::abs(e.initial) + std::abs(e.external_work) + std::abs(e.gravity_work) +
-                       std::abs(e.explosive_work);
+                       std::abs(e.explosive_work) + std::abs(e.insertion);
   if (e.mechanical() > factor * input && e.mechanical() > 1e-9) {
     std::size_t worst = 0;
     double vmax = -1;
@@ -118,10 +118,10 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
   if (!opt.quiet)
-    spdlog::info("{}: {} blocks, {} nodes, {} spring points; dt = {:.4g} s limited by the {} "
-                 "(blocks {:.4g} s, springs {:.4g} s, safety {}); {} threads",
-                 c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), sim.dt(), st.limit, st.dt_block,
-                 st.dt_spring, c.dt_safety, threads);
+    spdlog::info("{}: {} blocks, {} nodes, {} spring points, {} interfaces; dt = {:.4g} s limited "
+                 "by the {} (blocks {:.4g} s, springs {:.4g} s, safety {}); {} threads",
+                 c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), m.tied ? "tied" : "spring",
+                 sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety, threads);
 
   RunWriter out(opt.out_dir, c);
   std::FILE* charges_csv = nullptr;
@@ -223,6 +223,11 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"steps", std::to_string(res.steps)},
       {"dt", json_number(dt)},
       {"dt_limit", json_string(st.limit)},
+      {"interfaces", json_string(m.tied ? "tied" : "springs")},
+      {"untied_points", std::to_string(m.tied ? static_cast<long long>(std::count(m.sp_tied.begin(), m.sp_tied.end(), 0)) : 0LL)},
+      {"opened_stiffness_ratio_min", json_number(sim.opened_stiffness().ratio_min)},
+      {"opened_stiffness_ratio_median", json_number(sim.opened_stiffness().ratio_median)},
+      {"insertion_energy", json_number(last.insertion)},
       {"dt_blocks", json_number(st.dt_block)},
       {"dt_springs", json_number(st.dt_spring)},
       {"blocks", std::to_string(m.n_blocks())},

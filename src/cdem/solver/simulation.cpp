@@ -225,13 +225,14 @@ void Simulation::step(bool sample) {
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
   lap(kStepBlocks);
-  // 4. tied mode: ties broken by the blocks' traction are untied (their force added to f)
-  if (m_.tied) w_insert_ += tie_failure(m_, t_, tie_flag_);
-  lap(kStepTies);
-  // 5. (general contact: not yet) 6. explosive and other loads
+  // 4. (general contact: not yet) 5. explosive and other loads (a charge's blocks get their
+  // total stress: the products' pressure included)
   applied_.clear();
   for (auto& h : loads_) h(m_, applied_, t_);
   lap(kStepLoads);
+  // 6. tied mode: ties broken by the blocks' traction are untied (their force added to f)
+  if (m_.tied) w_insert_ += tie_failure(m_, t_, tie_flag_);
+  lap(kStepTies);
   // 7. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
   lap(kStepBoundary);

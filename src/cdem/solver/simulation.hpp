@@ -61,16 +61,16 @@ enum StepKernel {
   kStepPositions,
   kStepSprings,
   kStepBlocks,
-  kStepTies,
   kStepLoads,
+  kStepTies,
   kStepBoundary,
   kStepIntegrate,
   kStepWork,
   kNumStepKernels
 };
 constexpr const char* kStepKernelNames[kNumStepKernels] = {
-    "update_positions", "spring_forces",   "block_forces", "tie_failure",
-    "explosive_loads",  "boundary_forces", "integrate",    "constraints_and_work"};
+    "update_positions", "spring_forces",   "block_forces", "explosive_loads",
+    "tie_failure",      "boundary_forces", "integrate",    "constraints_and_work"};
 struct StepTimes {
   std::array<double, kNumStepKernels> s{};  // wall seconds per kernel, summed over the steps
 };

@@ -857,6 +857,8 @@ ENERGY_TERMS = [
     ("fracture", "fracture dissipation", "tab:brown", "-."),
     ("initial", "initial stored", "0.6", ":"),
     ("insertion", "opened points at insertion (input)", "tab:olive", ":"),
+    ("contact_strain", "contact (penalty) energy", "tab:cyan", "-"),
+    ("contact_friction", "contact friction dissipation", "tab:pink", "-."),
 ]
 
 
@@ -904,10 +906,12 @@ def plot_energy(runs, out_dir, written):
         a2.set_xlim(0, tmax * tf)
         fig.suptitle(f"Energy balance: {r.label}")
         return save(fig, out_dir, "energy.png", written)
-    groups = [("kinetic", ["kinetic"]), ("strain (blocks + springs)", ["block_strain", "spring_strain"]),
+    groups = [("kinetic", ["kinetic"]), ("strain (blocks + springs + contacts)",
+                                     ["block_strain", "spring_strain", "contact_strain"]),
               ("work input (external + gravity + explosive + insertion)",
                ["external_work", "gravity_work", "explosive_work", "insertion"]),
-              ("damping + absorbed", ["damping"]), ("fracture dissipation", ["fracture"])]
+              ("damping + absorbed", ["damping"]),
+              ("fracture + contact dissipation", ["fracture", "contact_friction"])]
     vmax = 1.0
     series = {}
     for r in runs_with:

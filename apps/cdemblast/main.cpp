@@ -60,6 +60,19 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
     fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",
                sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety);
   }
+  if (sim.contact().enabled) {
+    const auto& ct = sim.contact();
+    double kmin = 1e300, kmax = 0;
+    for (double k : ct.kc) kmin = std::min(kmin, k), kmax = std::max(kmax, k);
+    fmt::print("contact     on: node against {}, skin {:.3g} m, penalty {:.3g} to {:.3g} N/m, "
+               "friction {}, damping ratio {}\n",
+               m.dim == 3 ? "triangle" : "edge", ct.skin, kmin, kmax,
+               c.contact.friction >= 0 ? fmt::format("{}", c.contact.friction)
+                                       : std::string("from the interface materials"),
+               c.contact.damping_ratio);
+  } else {
+    fmt::print("contact     off\n");
+  }
   for (const auto& b : bars.bars)
     fmt::print("bar         hole '{}' deck {}: {:.4g} m, {} segments of {:.4g} m, starts at t = {:.4g} s\n",
                b.hole, b.deck + 1, b.length, b.seg_end - b.seg_begin, b.h, b.t0);

@@ -494,6 +494,7 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
         m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
                                0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
         m.sp_state[sp] = kReleased;
+        ++m.released_points;
         m.sp_fn[sp] = 0;
         m.sp_fs[sp] = {};
       });

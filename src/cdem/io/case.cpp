@@ -273,7 +273,8 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   c.dir = fs::absolute(path).parent_path().string();
   const TomlTable top(root, path, "");
   top.check_known({"title", "mesh", "simulation", "material", "interface", "boundary",
-                   "damping_zone", "monitor", "initial_stress", "explosive", "hole", "analysis"});
+                   "damping_zone", "monitor", "initial_stress", "explosive", "hole", "analysis",
+                   "contact"});
   c.title = top.string("title", fs::path(path).stem().string());
 
   // ---- mesh ----
@@ -402,6 +403,30 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     c.interfaces.push_back(im);
   }
 
+  // ---- contact (SPEC 1.5): on by default wherever fracture is possible ----
+  {
+    bool can_break = false;
+    for (const auto& im : c.interfaces)
+      can_break = can_break || im.law != InterfaceLaw::Elastic || im.precracked;
+    c.contact.enabled = can_break;
+    if (const auto ct = top.sub("contact")) {
+      ct->check_known({"enabled", "skin", "friction", "damping_ratio", "stiffness_factor"});
+      c.contact.enabled = ct->boolean("enabled", can_break);
+      c.contact.skin = ct->non_negative("skin", 0.0);
+      c.contact.friction = ct->has("friction") ? ct->non_negative("friction", 0.0) : -1.0;
+      c.contact.damping_ratio = ct->non_negative("damping_ratio", 0.0);
+      if (c.contact.damping_ratio > 1.0)
+        throw InputError(fmt::format("{}: expected a damping ratio in [0, 1], got {}",
+                                     ct->where("damping_ratio"), c.contact.damping_ratio));
+      c.contact.stiffness_factor = ct->positive("stiffness_factor", 1.0);
+      if (c.contact.stiffness_factor > 1.0)
+        throw InputError(fmt::format("{}: expected a value in (0, 1], got {} (above 1 the contact "
+                                     "stiffness would exceed the share of the stable step it is "
+                                     "given)",
+                                     ct->where("stiffness_factor"), c.contact.stiffness_factor));
+    }
+  }
+
   // ---- boundaries ----
   for (const auto& t : top.array_of_tables("boundary")) {
     t.check_known({"faces", "type", "velocity", "pressure", "table"});
@@ -524,6 +549,11 @@ std::string resolved_case_toml(const Case& c) {
   for (std::size_t i = 0; i < c.output_times.size(); ++i)
     o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);
   o += "]\n";
+  o += fmt::format("\n[contact]\nenabled = {}\nskin = {:.17g}\ndamping_ratio = {:.17g}\n"
+                   "stiffness_factor = {:.17g}\n",
+                   c.contact.enabled ? "true" : "false", c.contact.skin, c.contact.damping_ratio,
+                   c.contact.stiffness_factor);
+  if (c.contact.friction >= 0) o += fmt::format("friction = {:.17g}\n", c.contact.friction);
   for (const auto& m : c.materials) {
     o += fmt::format("\n[[material]]\nname = {}\nregions = [", q(m.name));
     for (std::size_t i = 0; i < m.regions.size(); ++i) o += (i ? ", " : "") + q(m.regions[i]);

@@ -10,6 +10,7 @@
 #include "cdem/explosive/eos.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/model/materials.hpp"
+#include "cdem/physics/contact.hpp"
 
 namespace cdem {
 
@@ -130,6 +131,7 @@ struct Case {
   double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2
 
   Vec3 gravity{};
+  ContactSettings contact;              // [contact]
   std::vector<BlockMaterial> materials;
   std::vector<InterfaceMaterial> interfaces;
   std::vector<BoundaryCondition> boundaries;

@@ -59,7 +59,8 @@ RunWriter::RunWriter(const std::string& dir, const Case& c) : dir_(dir), case_(c
                        "time,monitor,sxx,syy,szz,sxy,syz,sxz,von_mises,pressure,ux,uy,uz,vx,vy,vz\n");
   energy_ = open_csv((fs::path(dir) / "energy.csv").string(),
                      "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
-                     "explosive_work,damping,fracture,initial,insertion,balance,error\n");
+                     "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,balance,"
+                     "error\n");
   fracture_ = open_csv((fs::path(dir) / "fracture.csv").string(),
                        "time,degree_area,tensile_area,shear_area,degree_count,broken,total\n");
 }
@@ -168,9 +169,10 @@ void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
                  s.stress[3], s.stress[4], s.stress[5], s.von_mises, s.pressure, s.displacement.x,
                  s.displacement.y, s.displacement.z, s.velocity.x, s.velocity.y, s.velocity.z);
   }
-  std::fprintf(energy_, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", t,
-               e.kinetic, e.block_strain, e.spring_strain, e.external_work, e.gravity_work,
-               e.explosive_work, e.damping, e.fracture, e.initial, e.insertion, e.balance, e.error);
+  std::fprintf(energy_, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n",
+               t, e.kinetic, e.block_strain, e.spring_strain, e.external_work, e.gravity_work,
+               e.explosive_work, e.damping, e.fracture, e.initial, e.insertion, e.contact_strain,
+               e.contact_friction, e.balance, e.error);
   const FractureDegree fd = fracture_degree(m);
   std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld\n", t, fd.area, fd.tensile, fd.shear,
                fd.count, static_cast<long long>(fd.broken), static_cast<long long>(fd.total));

@@ -115,6 +115,8 @@ struct Model {
   std::vector<std::uint8_t> sp_mode;           // BreakMode
   std::vector<float> sp_break_time;            // s (-1 intact)
   std::vector<double> sp_dissipated;           // J, fracture + friction + plastic work
+  std::int64_t released_points = 0;            // spring points released so far (general contact
+                                               // rebuilds its candidates when it changes)
   // The force of spring point s on node a (node b gets minus it) is not stored: it is
   // sp_fn[s] * iface_normal[s / springs_per_iface] + sp_fs[s] (spring_force, springs.hpp).
   std::vector<std::int32_t> block_iface_offset;  // CSR block -> interfaces, size n_blocks + 1

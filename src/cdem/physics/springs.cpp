@@ -129,10 +129,12 @@ namespace {
 
 // The full update of spring point s (interface i) with the dissipation book-keeping: breaking,
 // broken contact and friction, softening (fracture-energy law), release.
-void spring_full_update(Model& m, const SpringLaw& law, std::int64_t i, std::int64_t s, Vec3 d,
+// Returns 1 when the point was released in this update (else 0).
+int spring_full_update(Model& m, const SpringLaw& law, std::int64_t i, std::int64_t s, Vec3 d,
                         Vec3 du, Vec3 n, Vec3 n_old, double off, double t, bool fe) {
   const double kn = m.sp_kn.v[i], ks = m.sp_ks.v[i], area = m.sp_area.v[i];
   const double fn_old = m.sp_fn[s];
+  const std::uint8_t state_old = m.sp_state[s];
   const Vec3 fs_old = m.sp_fs[s];
   SpringPoint sp{kn,     ks,           area,    fn_old,
                  fs_old, fe ? m.sp_w[s] : 0.0, fe ? m.sp_slip[s] : 0.0, fe ? m.sp_dil[s] : 0.0,
@@ -152,14 +154,16 @@ void spring_full_update(Model& m, const SpringLaw& law, std::int64_t i, std::int
   m.sp_mode[s] = sp.mode;
   m.sp_break_time[s] = sp.break_time;
   m.sp_dissipated[s] = sp.dissipated;
+  return state_old != kReleased && sp.state == kReleased;
 }
 
 // One interface of the reference form. kTied: tied points (Model::sp_tied) are skipped (no
 // force, no update) and the previous normal is always the kept one.
 template <bool kTied>
-inline void spring_interface(Model& m, std::int64_t i, double dt, double t, bool have_old,
-                             bool fe) {
+inline int spring_interface(Model& m, std::int64_t i, double dt, double t, bool have_old,
+                            bool fe) {
   const int np = m.springs_per_iface;
+  int released = 0;
   {
     const std::int64_t s0 = i * np;
     Vec3 pa[3], pb[3];
@@ -227,9 +231,10 @@ inline void spring_interface(Model& m, std::int64_t i, double dt, double t, bool
           continue;
         }
       }
-      spring_full_update(m, law, i, s, d, du, n, n_old, off, t, fe);
+      released += spring_full_update(m, law, i, s, d, du, n, n_old, off, t, fe);
     }
   }
+  return released;
 }
 
 // The reference form, one interface at a time: the first call (no previous normal kept) and
@@ -238,8 +243,10 @@ void spring_forces_generic(Model& m, double dt, double t) {
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
   const bool have_old = m.iface_normal_set;
   const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < ni; ++i) spring_interface<false>(m, i, dt, t, have_old, fe);
+  std::int64_t released = 0;
+#pragma omp parallel for schedule(static) reduction(+ : released)
+  for (std::int64_t i = 0; i < ni; ++i) released += spring_interface<false>(m, i, dt, t, have_old, fe);
+  m.released_points += released;
   m.iface_normal_set = true;
 }
 
@@ -249,8 +256,10 @@ void spring_forces_tied(Model& m, double dt, double t) {
   const auto na = static_cast<std::int64_t>(m.active_ifaces.size());
   const bool fe = !m.sp_w.empty();
   const std::int32_t* list = m.active_ifaces.data();
-#pragma omp parallel for schedule(static)
-  for (std::int64_t k = 0; k < na; ++k) spring_interface<true>(m, list[k], dt, t, true, fe);
+  std::int64_t released = 0;
+#pragma omp parallel for schedule(static) reduction(+ : released)
+  for (std::int64_t k = 0; k < na; ++k) released += spring_interface<true>(m, list[k], dt, t, true, fe);
+  m.released_points += released;
   m.iface_normal_set = true;
 }
 
@@ -269,7 +278,7 @@ constexpr int kChunk = 32;
 //  3. the flagged ones, one at a time, through the full update.
 // The law of each interface is read per lane.
 template <int NP, bool kG0>
-void spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe) {
+int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe) {
   // Per interface (index l) the previous normal; per spring point of the chunk (index k = l NP + q,
   // the interface's values repeated NP times, so that the spring loop reads them contiguously)
   // the normal, the spin, the constants and the law's parameters.
@@ -461,9 +470,10 @@ void spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe
   // (Counted here: a simd reduction in the loop above made GCC 12 leave that loop scalar.)
   int n_keep = 0;  // spring points neither vector path takes
   for (int k = 0; k < w * NP; ++k) n_keep += keep[k];
-  if (n_keep == 0) return;
+  if (n_keep == 0) return 0;
   for (int k = 0; k < w * NP; ++k)
     if (keep[k]) m.sp_fs[s_begin + k] = Vec3{fsx0[k], fsy0[k], fsz0[k]};
+  int released = 0;
   for (int k = 0; k < w * NP; ++k) {
     if (!slow[k]) continue;
     const int l = k / NP;
@@ -473,8 +483,9 @@ void spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe
     const Vec3 du = dt * Vec3{dvx[k], dvy[k], dvz[k]} - dot(d, n) * e;
     const double off = kG0 ? g0[s] : 0.0;
     const std::int64_t i = i0 + l;
-    spring_full_update(m, laws[mat[i]], i, s, d, du, n, n_old, off, t, fe);
+    released += spring_full_update(m, laws[mat[i]], i, s, d, du, n, n_old, off, t, fe);
   }
+  return released;
 }
 
 template <int NP, bool kG0>
@@ -482,11 +493,13 @@ void spring_forces_chunked(Model& m, double dt, double t) {
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
   const std::int64_t nc = (ni + kChunk - 1) / kChunk;
   const bool fe = !m.sp_w.empty();
-#pragma omp parallel for schedule(static)
+  std::int64_t released = 0;
+#pragma omp parallel for schedule(static) reduction(+ : released)
   for (std::int64_t c = 0; c < nc; ++c) {
     const std::int64_t i0 = c * kChunk;
-    spring_chunk<NP, kG0>(m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe);
+    released += spring_chunk<NP, kG0>(m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe);
   }
+  m.released_points += released;
 }
 
 }  // namespace

@@ -50,8 +50,9 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     if (!m_.damping.empty() || !m_.local_damping.empty()) vtx_cke_.assign(nv, 0.0);
     tie_flag_.assign(m_.n_ifaces(), 0);
   } else {
-    stable_ = stable_time_step(m_, c.dt_safety);
+    stable_ = stable_time_step(m_, c.dt_safety, c.contact.enabled);
   }
+  contact_ = setup_contact(m_, c.contact, c.opened_stiffness, m_.tied ? omega2_max_ : 0.0);
   fixed_dt_ = c.fixed_dt;
   case_path_ = c.path;
   dt_ = stable_.dt;
@@ -225,8 +226,11 @@ void Simulation::step(bool sample) {
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
   lap(kStepBlocks);
-  // 4. (general contact: not yet) 5. explosive and other loads (a charge's blocks get their
-  // total stress: the products' pressure included)
+  // 4. general contact between fragments, released faces and boundary faces
+  contact_forces(m_, contact_, dt_);
+  lap(kStepContact);
+  // 5. explosive and other loads (a charge's blocks get their total stress: the products'
+  // pressure included)
   applied_.clear();
   for (auto& h : loads_) h(m_, applied_, t_);
   lap(kStepLoads);
@@ -322,7 +326,9 @@ EnergyBalance Simulation::energy() const {
   e.explosive_work = w_explosive_ - last_explosive_;
   e.initial = e_initial_;
   e.insertion = w_insert_;
-  const double stored = e.mechanical() + e.damping + e.fracture;
+  e.contact_strain = contact_energy(contact_);
+  e.contact_friction = contact_dissipated(contact_);
+  const double stored = e.mechanical() + e.damping + e.fracture + e.contact_friction;
   const double input =
       e.initial + e.external_work + e.gravity_work + e.explosive_work + e.insertion;
   e.balance = stored - input;

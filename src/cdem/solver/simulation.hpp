@@ -11,6 +11,7 @@
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 #include "cdem/physics/boundaries.hpp"
+#include "cdem/physics/contact.hpp"
 #include "cdem/physics/ties.hpp"
 #include "cdem/solver/time_step.hpp"
 
@@ -28,9 +29,11 @@ struct EnergyBalance {
   double initial = 0;          // stored energy at t = 0 (pre-stressed springs)
   double insertion = 0;        // tied mode: elastic energy of the springs of untied points at
                                // the moment they were untied (tie_failure.hpp)
+  double contact_strain = 0;   // elastic (penalty) energy held by the general contacts
+  double contact_friction = 0; // dissipated by the general contacts (friction, damping)
   // balance = (stored + dissipated) - (initial + work in); error = |balance| / scale
   double balance = 0, error = 0;
-  double mechanical() const { return kinetic + block_strain + spring_strain; }
+  double mechanical() const { return kinetic + block_strain + spring_strain + contact_strain; }
 };
 
 // Forces applied by extra loads during a step, kept so that their work can be integrated with
@@ -61,6 +64,7 @@ enum StepKernel {
   kStepPositions,
   kStepSprings,
   kStepBlocks,
+  kStepContact,
   kStepLoads,
   kStepTies,
   kStepBoundary,
@@ -69,7 +73,7 @@ enum StepKernel {
   kNumStepKernels
 };
 constexpr const char* kStepKernelNames[kNumStepKernels] = {
-    "update_positions", "spring_forces",   "block_forces", "explosive_loads",
+    "update_positions", "spring_forces",   "block_forces", "contact",      "explosive_loads",
     "tie_failure",      "boundary_forces", "integrate",    "constraints_and_work"};
 struct StepTimes {
   std::array<double, kNumStepKernels> s{};  // wall seconds per kernel, summed over the steps
@@ -94,6 +98,7 @@ class Simulation {
   // the springs mode's E / h (min, median).
   double omega2_max() const { return omega2_max_; }
   const OpenedStiffness& opened_stiffness() const { return opened_; }
+  const ContactSet& contact() const { return contact_; }
 
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
   EnergyBalance energy() const;
@@ -135,6 +140,7 @@ class Simulation {
   std::vector<std::uint8_t> tie_flag_;
   double w_insert_ = 0, omega2_max_ = 0;
   OpenedStiffness opened_;
+  ContactSet contact_;
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
   // The parts after t_n of the last step's works, F(n) . v(n+1/2) dt / 2 (energy())
   double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;

@@ -9,7 +9,7 @@
 
 namespace cdem {
 
-StableStep stable_time_step(const Model& m, double safety) {
+StableStep stable_time_step(const Model& m, double safety, bool contact_share) {
   StableStep s;
   s.dt_block = std::numeric_limits<double>::infinity();
   s.dt_spring = std::numeric_limits<double>::infinity();
@@ -26,10 +26,15 @@ StableStep stable_time_step(const Model& m, double safety) {
   }
   // Spring stiffness at each node, summed in ascending spring order.
   std::vector<double> k_node(m.n_nodes(), 0.0);
+  std::vector<std::int32_t> count(contact_share ? m.n_nodes() : 0, 0);
   for (std::size_t sp = 0; sp < m.n_springs(); ++sp) {
     k_node[m.sp_a[sp]] += m.sp_kn[sp];
     k_node[m.sp_b[sp]] += m.sp_kn[sp];
+    if (contact_share) ++count[m.sp_a[sp]], ++count[m.sp_b[sp]];
   }
+  if (contact_share)
+    for (std::size_t n = 0; n < m.n_nodes(); ++n)
+      if (count[n] > 0) k_node[n] *= (count[n] + 1.0) / count[n];
   for (std::size_t n = 0; n < m.n_nodes(); ++n) {
     const double k = k_node[n];
     if (k <= 0) continue;

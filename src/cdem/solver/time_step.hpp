@@ -19,7 +19,10 @@ struct StableStep {
   std::string limit;         // "blocks" or "springs"
 };
 
-StableStep stable_time_step(const Model& m, double safety);
+// With contact_share, every node counts one more spring of the mean stiffness of its own spring
+// points: the general contact's penalty in springs mode (physics/contact.hpp), so that a node
+// with all its springs and a contact stays within the step.
+StableStep stable_time_step(const Model& m, double safety, bool contact_share = false);
 
 // The largest eigenvalue omega_e^2 of M_e^-1 K_e of block b (1/s^2): its linear stiffness at the
 // reference configuration, K_e = sum over integration points w_q B^T D B (the kernels' Lame

@@ -1,0 +1,654 @@
+#include "cdem/physics/contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "cdem/mesh/element_geometry.hpp"
+
+namespace cdem {
+namespace {
+
+// The nodes of block face slot f (4 b + k), outward order; returns their count (2 or 3).
+inline int face_nodes(const Model& m, std::int32_t f, std::int32_t* q) {
+  const std::int32_t b = f / 4, k = f % 4;
+  const LocalFaces lf = local_faces(m.block_type[b]);
+  const std::int32_t n0 = m.block_first_node[b];
+  for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = n0 + lf.f[k][i];
+  return lf.nodes_per_face;
+}
+
+std::int32_t find_root(std::vector<std::int32_t>& p, std::int32_t x) {
+  while (p[x] != x) x = p[x] = p[p[x]];
+  return x;
+}
+
+// The interface material of a region pair, as the topology builder assigns it: the one listing
+// the pair, else the default one.
+const InterfaceMaterial* iface_material_of(const Model& m, const std::string& ra,
+                                           const std::string& rb) {
+  const InterfaceMaterial* dflt = nullptr;
+  for (const auto& im : m.iface_materials) {
+    for (const auto& [a, b] : im.pairs)
+      if ((a == ra && b == rb) || (a == rb && b == ra)) return &im;
+    if (im.is_default && !dflt) dflt = &im;
+  }
+  if (!dflt && !m.iface_materials.empty()) dflt = &m.iface_materials.front();
+  return dflt;
+}
+
+// Are nodes n and q (split from one vertex) bonded: tied in one cluster, or joined by a spring
+// point that is not released (that point is their contact)?
+bool bonded(const Model& m, std::int32_t n, std::int32_t q) {
+  const std::int32_t b = m.node_block(static_cast<std::size_t>(n));
+  const int np = m.springs_per_iface;
+  for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+    const std::int32_t code = m.block_iface_list[e];
+    const bool a_side = code > 0;
+    const std::size_t s0 = static_cast<std::size_t>((a_side ? code : -code) - 1) * np;
+    for (int i = 0; i < np; ++i) {
+      const std::size_t s = s0 + i;
+      const std::int32_t mine = a_side ? m.sp_a[s] : m.sp_b[s];
+      const std::int32_t other = a_side ? m.sp_b[s] : m.sp_a[s];
+      if (mine == n && other == q) return m.sp_state[s] != kReleased || (m.tied && m.sp_tied[s]);
+    }
+  }
+  return false;
+}
+
+inline std::uint64_t cell_hash(std::int64_t i, std::int64_t j, std::int64_t k) {
+  return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+         static_cast<std::uint64_t>(k) * 83492791ULL;
+}
+
+void rebuild(Model& m, ContactSet& cs) {
+  const std::size_t nb = m.n_blocks(), ni = m.n_ifaces();
+  const int np = m.springs_per_iface;
+  ++cs.rebuilds;
+  // The previous pairs and their state, merged into the new list at the end.
+  std::vector<std::int32_t> old_node, old_face;
+  std::vector<double> old_fn, old_diss, old_gap, old_k, old_g0;
+  std::vector<Vec3> old_ft, old_force;
+  old_node.swap(cs.pair_node);
+  old_face.swap(cs.pair_block);
+  old_fn.swap(cs.pair_fn);
+  old_diss.swap(cs.pair_diss);
+  old_gap.swap(cs.pair_gap);
+  old_k.swap(cs.pair_k);
+  old_g0.swap(cs.pair_g0);
+  old_ft.swap(cs.pair_ft);
+  old_force.swap(cs.pair_force);
+  // 1. Bodies: blocks connected through points that are not released.
+  cs.body.resize(nb);
+  std::iota(cs.body.begin(), cs.body.end(), 0);
+  std::vector<std::uint8_t> iface_released(ni, 0);
+  for (std::size_t i = 0; i < ni; ++i) {
+    bool joined = false, released = false;
+    for (int q = 0; q < np; ++q) {
+      const auto st = m.sp_state[i * np + q];
+      joined = joined || st != kReleased;
+      released = released || st == kReleased;
+    }
+    iface_released[i] = released;
+    if (joined) {
+      const auto ra = find_root(cs.body, m.iface_block_a[i]), rb = find_root(cs.body, m.iface_block_b[i]);
+      if (ra != rb) cs.body[std::max(ra, rb)] = std::min(ra, rb);
+    }
+  }
+  for (std::size_t b = 0; b < nb; ++b) cs.body[b] = find_root(cs.body, static_cast<std::int32_t>(b));
+  // 2. Candidate faces: boundary faces and faces of interfaces with a released point.
+  cs.cand_faces.clear();
+  cs.on_released.assign(m.n_nodes(), 0);
+  cs.face_cand.assign(cs.face_iface.size(), 0);
+  std::int32_t q[3];
+  for (std::size_t f = 0; f < cs.face_iface.size(); ++f) {
+    const std::int32_t b = static_cast<std::int32_t>(f / 4), k = static_cast<std::int32_t>(f % 4);
+    if (k >= local_faces(m.block_type[b]).count) continue;
+    const std::int32_t i = cs.face_iface[f];
+    if (i >= 0 && !iface_released[i]) continue;
+    cs.cand_faces.push_back(static_cast<std::int32_t>(f));
+    cs.face_cand[f] = 1;
+    if (i >= 0) {
+      const int c = face_nodes(m, static_cast<std::int32_t>(f), q);
+      for (int j = 0; j < c; ++j) cs.on_released[q[j]] = 1;
+    }
+  }
+  // 3. Candidate nodes: the nodes of the candidate faces.
+  cs.cand_nodes.clear();
+  for (auto f : cs.cand_faces) {
+    const int c = face_nodes(m, f, q);
+    for (int j = 0; j < c; ++j) cs.cand_nodes.push_back(q[j]);
+  }
+  std::sort(cs.cand_nodes.begin(), cs.cand_nodes.end());
+  cs.cand_nodes.erase(std::unique(cs.cand_nodes.begin(), cs.cand_nodes.end()), cs.cand_nodes.end());
+  cs.x_build.resize(cs.cand_nodes.size());
+  for (std::size_t j = 0; j < cs.cand_nodes.size(); ++j) cs.x_build[j] = m.x[cs.cand_nodes[j]];
+  // 4. Grid: each face's box grown by the skin, registered in every cell it overlaps (cell size:
+  // twice the median grown box, so a face covers at most 2^dim cells but rarely more).
+  const std::size_t nf = cs.cand_faces.size();
+  std::vector<Vec3> lo(nf), hi(nf);
+  std::vector<double> ext(nf);
+  for (std::size_t j = 0; j < nf; ++j) {
+    const int c = face_nodes(m, cs.cand_faces[j], q);
+    Vec3 a = m.x[q[0]], b = a;
+    for (int i = 1; i < c; ++i)
+      for (int d = 0; d < 3; ++d) a[d] = std::min(a[d], m.x[q[i]][d]), b[d] = std::max(b[d], m.x[q[i]][d]);
+    // the box also holds the region behind the face where a contact is sought (-g up to half
+    // the face block's size)
+    const double depth = 0.5 * m.block_size[cs.cand_faces[j] / 4];
+    for (int d = 0; d < cs.dim; ++d) a[d] -= cs.skin + depth, b[d] += cs.skin + depth;
+    lo[j] = a;
+    hi[j] = b;
+    double e = 0;
+    for (int d = 0; d < cs.dim; ++d) e = std::max(e, b[d] - a[d]);
+    ext[j] = e;
+  }
+  cs.pair_node.clear();
+  cs.pair_block.clear();
+  if (nf > 0 && !cs.cand_nodes.empty()) {
+    std::vector<double> sorted_ext = ext;
+    std::nth_element(sorted_ext.begin(), sorted_ext.begin() + nf / 2, sorted_ext.end());
+    const double cell = std::max(2.0 * sorted_ext[nf / 2], 1e-12);
+    std::size_t tsize = 1;
+    while (tsize < 2 * nf) tsize <<= 1;
+    const std::uint64_t mask = tsize - 1;
+    auto idx = [&](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
+    auto for_cells = [&](std::size_t j, auto&& fn) {
+      const std::int64_t i0 = idx(lo[j].x), i1 = idx(hi[j].x), j0 = idx(lo[j].y), j1 = idx(hi[j].y);
+      const std::int64_t k0 = cs.dim == 3 ? idx(lo[j].z) : 0, k1 = cs.dim == 3 ? idx(hi[j].z) : 0;
+      for (auto a = i0; a <= i1; ++a)
+        for (auto b = j0; b <= j1; ++b)
+          for (auto c = k0; c <= k1; ++c) fn(cell_hash(a, b, c) & mask);
+    };
+    cs.bucket_offset.assign(tsize + 1, 0);
+    for (std::size_t j = 0; j < nf; ++j) for_cells(j, [&](std::uint64_t h) { ++cs.bucket_offset[h + 1]; });
+    for (std::size_t h = 0; h < tsize; ++h) cs.bucket_offset[h + 1] += cs.bucket_offset[h];
+    cs.bucket_entry.resize(cs.bucket_offset[tsize]);
+    {
+      std::vector<std::int32_t> fill(cs.bucket_offset.begin(), cs.bucket_offset.end() - 1);
+      for (std::size_t j = 0; j < nf; ++j)
+        for_cells(j, [&](std::uint64_t h) { cs.bucket_entry[fill[h]++] = static_cast<std::int32_t>(j); });
+    }
+    // 5. Pairs, node by node (ascending), blocks ascending.
+    for (const auto n : cs.cand_nodes) {
+      const Vec3 x = m.x[n];
+      const auto h = cell_hash(idx(x.x), idx(x.y), cs.dim == 3 ? idx(x.z) : 0) & mask;
+      const std::int32_t bn = m.node_block(static_cast<std::size_t>(n));
+      cs.scratch.clear();
+      for (auto e = cs.bucket_offset[h]; e < cs.bucket_offset[h + 1]; ++e) {
+        const auto j = static_cast<std::size_t>(cs.bucket_entry[e]);
+        bool inside = true;
+        for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= lo[j][d] && x[d] <= hi[j][d];
+        if (!inside) continue;
+        const std::int32_t f = cs.cand_faces[j];
+        const std::int32_t bf = f / 4;
+        if (bf == bn) continue;
+        const bool released = cs.on_released[n] || cs.face_iface[f] >= 0;
+        if (cs.body[bf] == cs.body[bn] && !released) continue;
+        cs.scratch.push_back(bf);
+      }
+      std::sort(cs.scratch.begin(), cs.scratch.end());
+      cs.scratch.erase(std::unique(cs.scratch.begin(), cs.scratch.end()), cs.scratch.end());
+      for (auto bf : cs.scratch) {
+        bool skip = false;
+        for (auto qn = m.block_first_node[bf]; qn < m.block_first_node[bf + 1] && !skip; ++qn)
+          skip = m.node_vertex[qn] == m.node_vertex[n] && bonded(m, n, qn);
+        if (skip) continue;
+        cs.pair_node.push_back(n);
+        cs.pair_block.push_back(bf);
+      }
+    }
+  }
+  // 6. Carry the state of the pairs that stay (both lists sorted by (node, block)); a pair that
+  // is dropped while holding elastic energy books it as dissipated (the balance stays closed).
+  const std::size_t npair = cs.pair_node.size();
+  cs.pair_fn.assign(npair, 0.0);
+  cs.pair_diss.assign(npair, 0.0);
+  cs.pair_gap.assign(npair, 0.0);
+  cs.pair_g0.assign(npair, 0.0);
+  cs.pair_k.assign(npair, 0.0);
+  cs.pair_ft.assign(npair, Vec3{});
+  cs.pair_force.assign(npair, Vec3{});
+  cs.pair_w.assign(npair, {0.0, 0.0, 0.0, 0.0});
+  std::vector<std::uint8_t> old_in;
+  old_in.swap(cs.pair_in);
+  std::vector<std::int8_t> old_kf;
+  old_kf.swap(cs.pair_kf);
+  cs.pair_kf.assign(npair, -1);
+  cs.pair_in.assign(npair, 2);  // 2: new at this build (carried pairs get their flag below)
+  {
+    std::size_t o = 0;
+    const std::size_t nold = old_node.size();
+    auto older = [&](std::size_t a, std::size_t p) {
+      return old_node[a] != cs.pair_node[p] ? old_node[a] < cs.pair_node[p] : old_face[a] < cs.pair_block[p];
+    };
+    auto drop = [&](std::size_t a) {
+      cs.diss_closed += old_diss[a];
+      if (old_k[a] > 0)
+        cs.diss_closed += 0.5 * old_k[a] * old_gap[a] * old_gap[a] +
+                          0.5 * dot(old_ft[a], old_ft[a]) / (cs.shear_ratio * old_k[a]);
+    };
+    for (std::size_t p = 0; p < npair; ++p) {
+      while (o < nold && older(o, p)) drop(o++);
+      if (o < nold && old_node[o] == cs.pair_node[p] && old_face[o] == cs.pair_block[p]) {
+        cs.pair_fn[p] = old_fn[o];
+        cs.pair_diss[p] = old_diss[o];
+        cs.pair_gap[p] = old_gap[o];
+        cs.pair_g0[p] = old_g0[o];
+        cs.pair_ft[p] = old_ft[o];
+        cs.pair_force[p] = old_force[o];
+        cs.pair_in[p] = old_in[o];
+        cs.pair_kf[p] = old_kf[o];
+        ++o;
+      }
+    }
+    while (o < nold) drop(o++);
+    // A new pair whose node was in contact with the same body through another block is not a
+    // new overlap: its depth is the contact's, not to be ignored.
+    std::size_t a = 0;
+    for (std::size_t p = 0; p < npair; ++p) {
+      if (cs.pair_in[p] != 2) continue;
+      while (a < nold && old_node[a] < cs.pair_node[p]) ++a;
+      for (std::size_t b = a; b < nold && old_node[b] == cs.pair_node[p]; ++b)
+        if (old_gap[b] > 0 && cs.body[old_face[b]] == cs.body[cs.pair_block[p]]) cs.pair_in[p] = 1;
+    }
+  }
+  // The pair's stiffness: the smallest of the node's and the block nodes' budgets.
+  for (std::size_t p = 0; p < npair; ++p) {
+    const std::int32_t b = cs.pair_block[p];
+    double k = cs.kc[cs.pair_node[p]];
+    for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) k = std::min(k, cs.kc[qn]);
+    cs.pair_k[p] = k;
+  }
+  // 7. Gathers. Node side: the pairs of one node are consecutive.
+  cs.node_start.clear();
+  for (std::size_t p = 0; p < npair; ++p)
+    if (p == 0 || cs.pair_node[p] != cs.pair_node[p - 1]) cs.node_start.push_back(static_cast<std::int32_t>(p));
+  cs.node_start.push_back(static_cast<std::int32_t>(npair));
+  // Block side: entries 4 p + i per block node, ordered by (node, p, i).
+  cs.fnode.clear();
+  for (std::size_t p = 0; p < npair; ++p) {
+    const std::int32_t b = cs.pair_block[p];
+    for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) cs.fnode.push_back(qn);
+  }
+  std::sort(cs.fnode.begin(), cs.fnode.end());
+  cs.fnode.erase(std::unique(cs.fnode.begin(), cs.fnode.end()), cs.fnode.end());
+  cs.fnode_offset.assign(cs.fnode.size() + 1, 0);
+  auto slot = [&](std::int32_t qn) {
+    return std::lower_bound(cs.fnode.begin(), cs.fnode.end(), qn) - cs.fnode.begin();
+  };
+  for (std::size_t p = 0; p < npair; ++p) {
+    const std::int32_t b = cs.pair_block[p];
+    for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) ++cs.fnode_offset[slot(qn) + 1];
+  }
+  for (std::size_t j = 0; j < cs.fnode.size(); ++j) cs.fnode_offset[j + 1] += cs.fnode_offset[j];
+  cs.fnode_entry.resize(cs.fnode_offset.back());
+  {
+    std::vector<std::int32_t> fill(cs.fnode_offset.begin(), cs.fnode_offset.end() - 1);
+    for (std::size_t p = 0; p < npair; ++p) {
+      const std::int32_t b = cs.pair_block[p];
+      for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn)
+        cs.fnode_entry[fill[slot(qn)]++] = static_cast<std::int32_t>(4 * p + (qn - m.block_first_node[b]));
+    }
+  }
+  cs.released_seen = m.released_points;
+}
+
+}  // namespace
+
+ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta, double omega2_max) {
+  ContactSet cs;
+  cs.cfg = cfg;
+  cs.enabled = cfg.enabled;
+  cs.dim = m.dim;
+  if (!cs.enabled) return cs;
+  const std::size_t nb = m.n_blocks(), nn = m.n_nodes();
+  const int np = m.springs_per_iface;
+  // Block faces -> interfaces.
+  cs.face_iface.assign(4 * nb, -1);
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    for (int side = 0; side < 2; ++side) {
+      const std::int32_t b = side ? m.iface_block_b[i] : m.iface_block_a[i];
+      const std::int32_t* nodes = (side ? m.sp_b.data() : m.sp_a.data()) + i * np;
+      const LocalFaces lf = local_faces(m.block_type[b]);
+      for (int k = 0; k < lf.count; ++k) {
+        int hits = 0;
+        for (int a = 0; a < np; ++a)
+          for (int c = 0; c < lf.nodes_per_face; ++c)
+            hits += m.block_first_node[b] + lf.f[k][c] == nodes[a];
+        if (hits == np) cs.face_iface[4 * b + k] = static_cast<std::int32_t>(i);
+      }
+    }
+  }
+  // Per-node stiffness. Tied mode: the node's share of the stability budget, as the opened
+  // points' (ties.hpp), over the most spring points a node can have (3 in 3D, 2 in 2D).
+  // Springs mode: the largest k_n A_c of the node's spring points.
+  cs.kc.assign(nn, 0.0);
+  const double cmax = m.dim == 3 ? 3.0 : 2.0;
+  if (omega2_max > 0) {
+    for (std::size_t n = 0; n < nn; ++n) cs.kc[n] = eta * omega2_max * m.mass[n] / (2.0 * cmax);
+  } else {
+    // the mean k_n A_c of the node's spring points (its share of the springs' step:
+    // stable_time_step counts it)
+    std::vector<std::int32_t> count(nn, 0);
+    for (std::size_t s = 0; s < m.n_springs(); ++s)
+      for (auto n : {m.sp_a[s], m.sp_b[s]}) cs.kc[n] += m.sp_kn[s], ++count[n];
+    for (std::size_t n = 0; n < nn; ++n)
+      if (count[n] > 0) cs.kc[n] /= count[n];
+    // nodes without spring points: the springs' formula alpha E / h A_c with alpha = 10,
+    // A_c ~ L_c^(dim-1) / (dim) (a face of the block shared by its nodes)
+    for (std::size_t b = 0; b < nb; ++b) {
+      const auto& mat = m.block_materials[m.block_material[b]];
+      const double h = m.block_size[b];
+      const double k = 10.0 * mat.youngs / h * std::pow(h, m.dim - 1) / m.dim;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
+        if (cs.kc[n] <= 0) cs.kc[n] = k;
+    }
+  }
+  for (auto& k : cs.kc) k *= cfg.stiffness_factor;
+  // Friction per region pair.
+  cs.nreg = static_cast<int>(m.region_names.size());
+  cs.mu.assign(static_cast<std::size_t>(cs.nreg) * cs.nreg, 0.0);
+  constexpr double deg = 3.14159265358979323846 / 180.0;
+  for (int a = 0; a < cs.nreg; ++a)
+    for (int b = 0; b < cs.nreg; ++b) {
+      double mu = cfg.friction;
+      if (mu < 0) {
+        const auto* im = iface_material_of(m, m.region_names[a], m.region_names[b]);
+        mu = im ? std::tan(im->residual_friction() * deg) : 0.5;
+      }
+      cs.mu[static_cast<std::size_t>(a) * cs.nreg + b] = mu;
+    }
+  // k_t / k = G / E of the first rock material (the springs' ratio).
+  for (const auto& mat : m.block_materials)
+    if (mat.explosive.empty()) {
+      cs.shear_ratio = mat.shear() / mat.youngs;
+      break;
+    }
+  // Skin.
+  if (cfg.skin > 0) {
+    cs.skin = cfg.skin;
+  } else {
+    std::vector<double> sz(m.block_size.begin(), m.block_size.end());
+    if (!sz.empty()) {
+      std::nth_element(sz.begin(), sz.begin() + sz.size() / 2, sz.end());
+      cs.skin = 0.25 * sz[sz.size() / 2];
+    }
+  }
+  return cs;
+}
+
+void contact_forces(Model& m, ContactSet& cs, double dt) {
+  if (!cs.enabled) return;
+  // Rebuild when points were released or a candidate node has moved more than skin / 2.
+  bool due = cs.released_seen != m.released_points;
+  if (!due) {
+    const auto nc = static_cast<std::int64_t>(cs.cand_nodes.size());
+    const double lim2 = 0.25 * cs.skin * cs.skin;
+    int moved = 0;
+#pragma omp parallel for schedule(static) reduction(| : moved)
+    for (std::int64_t j = 0; j < nc; ++j) {
+      const Vec3 d = m.x[cs.cand_nodes[j]] - cs.x_build[j];
+      moved |= dot(d, d) > lim2;
+    }
+    due = moved != 0;
+  }
+  if (due) rebuild(m, cs);
+  const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
+  if (npair == 0) {
+    cs.active = 0;
+    return;
+  }
+  const double zeta = cs.cfg.damping_ratio;
+  std::int64_t active = 0;
+  double pen_ratio = 0;
+  // (a) geometry of every pair
+  cs.pair_g.resize(npair);
+  cs.pair_score.resize(npair);
+  cs.pair_kf_now.resize(npair);
+  cs.pair_margin.resize(npair);
+  cs.pair_n.resize(npair);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t p = 0; p < npair; ++p) {
+    const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+    const Vec3 x = m.x[n];
+    // The node against every face of the block: inside when behind all of them; the contact
+    // face is the nearest candidate face (largest g, the first of equals).
+    const LocalFaces lf = local_faces(m.block_type[b]);
+    const std::int32_t n0 = m.block_first_node[b];
+    // (a node exactly on a face's plane or an edge, as where aligned blocks land corner on
+    // corner, counts as inside: vibration moves it by ~strain x size either way)
+    const double tol = 1e-3 * m.block_size[b];
+    bool inside = true;
+    double margin = std::numeric_limits<double>::infinity();
+    double gk_all[4];
+    Vec3 nk_all[4];
+    double gprev[4];
+    for (int k = 0; k < lf.count; ++k) {
+      const Vec3 a0 = m.x[n0 + lf.f[k][0]], a1 = m.x[n0 + lf.f[k][1]];
+      Vec3 nk, vf = m.v[n0 + lf.f[k][0]] + m.v[n0 + lf.f[k][1]];
+      if (lf.nodes_per_face == 3) {
+        nk = normalized(cross(a1 - a0, m.x[n0 + lf.f[k][2]] - a0));
+        vf = (1.0 / 3) * (vf + m.v[n0 + lf.f[k][2]]);
+      } else {
+        const Vec3 t = a1 - a0;
+        nk = normalized(Vec3{t.y, -t.x, 0.0});
+        vf = 0.5 * vf;
+      }
+      const double gk = dot(x - a0, nk);
+      gk_all[k] = gk;
+      nk_all[k] = nk;
+      gprev[k] = gk - dt * dot(m.v[n] - vf, nk);  // the gap a step ago (relative motion)
+      inside = inside && gk <= tol;
+      margin = std::min(margin, -gk);
+    }
+    // The contact face: the one the node is in contact with since an earlier step while it is
+    // still behind it; else, of the candidate faces it is behind or on (within tol), the one with
+    // the largest gap a step ago: the face it came in by (at an edge or a corner, not the one it
+    // happens to be nearest to), and a node on a face's plane, in front of it, is not in contact
+    // through the far side; else the nearest candidate face. In contact when behind that face.
+    int kf = -1;
+    const int kp = cs.pair_kf[p];
+    if (kp >= 0 && kp < lf.count && cs.face_cand[4 * b + kp] && gk_all[kp] < 0) kf = kp;
+    if (kf < 0) {  // behind or on (within tol) the plane: the face with the largest gap a step ago
+      double best = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < lf.count; ++k)
+        if (cs.face_cand[4 * b + k] && gk_all[k] < tol && gprev[k] > best) best = gprev[k], kf = k;
+    }
+    if (kf < 0) {
+      double best = -std::numeric_limits<double>::infinity();
+      for (int k = 0; k < lf.count; ++k)
+        if (cs.face_cand[4 * b + k] && gk_all[k] > best) best = gk_all[k], kf = k;
+    }
+    const double g = kf >= 0 ? gk_all[kf] : -std::numeric_limits<double>::infinity();
+    const Vec3 nrm = kf >= 0 ? nk_all[kf] : Vec3{};
+    // weights of the block's nodes: the projection onto face kf, barycentric, clamped
+    std::array<double, 4> w{0, 0, 0, 0};
+    if (kf >= 0) {
+      const int c = lf.nodes_per_face;
+      const std::array<int, 3>& fl = lf.f[kf];
+      const Vec3 p0 = m.x[n0 + fl[0]];
+      double wf[3] = {0, 0, 0};
+      if (c == 3) {
+        const Vec3 e1 = m.x[n0 + fl[1]] - p0, e2 = m.x[n0 + fl[2]] - p0, v2 = x - g * nrm - p0;
+        const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+        const double d20 = dot(v2, e1), d21 = dot(v2, e2), den = d00 * d11 - d01 * d01;
+        wf[1] = den > 0 ? (d11 * d20 - d01 * d21) / den : 1.0 / 3;
+        wf[2] = den > 0 ? (d00 * d21 - d01 * d20) / den : 1.0 / 3;
+        wf[0] = 1.0 - wf[1] - wf[2];
+      } else {
+        const Vec3 t = m.x[n0 + fl[1]] - p0;
+        const double l2 = dot(t, t);
+        wf[1] = l2 > 0 ? dot(x - p0, t) / l2 : 0.5;
+        wf[0] = 1.0 - wf[1];
+      }
+      double sum = 0;
+      for (int i = 0; i < c; ++i) sum += (wf[i] = std::max(0.0, wf[i]));
+      for (int i = 0; i < c; ++i) w[fl[i]] = sum > 0 ? wf[i] / sum : 1.0 / c;
+    }
+    cs.pair_g[p] = g;
+    cs.pair_n[p] = nrm;
+    cs.pair_kf_now[p] = static_cast<std::int8_t>(kf);
+    // the pair's claim on the body's contact: a holder (in contact through the same face since
+    // the last step) first, else the crossed face's gap a step ago; -inf: not penetrating
+    const bool pen = inside && kf >= 0 && g < 0;
+    cs.pair_margin[p] = !inside ? -1.0 : (pen ? 1.0 : 0.0);
+    cs.pair_score[p] = !pen ? -std::numeric_limits<double>::infinity()
+                            : (kp >= 0 && kf == kp ? std::numeric_limits<double>::max() : gprev[kf]);
+    (void)margin;
+    cs.pair_w[p] = w;
+  }
+  // (b) per node, per body: one block keeps the contact: the one that held it through the same
+  // face since the last step, else the one whose face the node crossed (largest gap a step ago),
+  // the first of equals
+  {
+    const auto nd = static_cast<std::int64_t>(cs.node_start.size()) - 1;
+#pragma omp parallel for schedule(static)
+    for (std::int64_t d = 0; d < nd; ++d) {
+      const auto p0 = cs.node_start[d], p1 = cs.node_start[d + 1];
+      for (auto p = p0; p < p1; ++p) {
+        if (cs.pair_margin[p] < 1.0) continue;  // not penetrating
+        for (auto q = p0; q < p1; ++q) {
+          if (q == p || cs.pair_margin[q] < 1.0) continue;
+          if (cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
+          const bool q_wins = cs.pair_score[q] > cs.pair_score[p] ||
+                              (cs.pair_score[q] == cs.pair_score[p] && q < p);
+          if (q_wins) {
+            cs.pair_margin[p] = 0.5;  // penetrating, but another block of the body has the contact
+            break;
+          }
+        }
+      }
+      // The contact of a body moves with the node from block to block: the winner takes over
+      // the state (tangential force, gap, ignored depth, last force) of the pair that held it,
+      // so the force and the stored energy carry on without a jump.
+      for (auto p = p0; p < p1; ++p) {
+        if (cs.pair_margin[p] < 1.0) continue;  // p: the winner of its body
+        for (auto q = p0; q < p1; ++q) {
+          if (q == p || cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
+          if (cs.pair_gap[q] == 0 && cs.pair_fn[q] == 0 && dot(cs.pair_force[q], cs.pair_force[q]) == 0)
+            continue;  // q held nothing
+          cs.pair_ft[p] = cs.pair_ft[q];
+          cs.pair_gap[p] = cs.pair_gap[q];
+          cs.pair_g0[p] = cs.pair_g0[q];
+          cs.pair_fn[p] = cs.pair_fn[q];
+          cs.pair_force[p] = cs.pair_force[q];
+          cs.pair_in[p] = 1;
+          cs.pair_kf[p] = cs.pair_kf_now[p];  // p holds it from now on
+          cs.pair_kf[q] = -1;
+          cs.pair_ft[q] = {};
+          cs.pair_gap[q] = 0;
+          cs.pair_g0[q] = 0;
+          cs.pair_fn[q] = 0;
+          cs.pair_force[q] = {};
+        }
+      }
+    }
+  }
+  // (c) forces and state
+#pragma omp parallel for schedule(static) reduction(+ : active) reduction(max : pen_ratio)
+  for (std::int64_t p = 0; p < npair; ++p) {
+    const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+    const std::int32_t n0 = m.block_first_node[b];
+    const std::array<double, 4>& w = cs.pair_w[p];
+    const double g = cs.pair_g[p];
+    const Vec3 nrm = cs.pair_n[p];
+    const bool inside = cs.pair_margin[p] >= 0;   // inside the block (whether it won or not)
+    const bool kf_ok = cs.pair_margin[p] >= 1.0;  // penetrating, with the contact of the body
+    const int nb_nodes = m.block_first_node[b + 1] - n0;
+    Vec3 vrel = m.v[n];
+    for (int i = 0; i < nb_nodes; ++i) vrel -= w[i] * m.v[n0 + i];
+    const Vec3 du = dt * vrel;
+    const double k = cs.pair_k[p], kt = cs.shear_ratio * k;
+    const Vec3 f_old = cs.pair_force[p];
+    const double e_old = 0.5 * k * cs.pair_gap[p] * cs.pair_gap[p] +
+                         (kt > 0 ? 0.5 * dot(cs.pair_ft[p], cs.pair_ft[p]) / kt : 0.0);
+    const bool in_contact = kf_ok && g < 0;
+    const double vn_rel = dot(vrel, nrm);
+    // The ignored penetration d0: set when the node comes inside, then only shrinking.
+    double d0 = cs.pair_g0[p];
+    if (in_contact && cs.pair_in[p] == 2)  // a pair new at this build: an overlap it inherits
+      d0 = std::max(0.0, -g - 2.0 * std::abs(vn_rel) * dt);
+    if (in_contact) d0 = std::min(d0, -g);
+    if (!inside) d0 = 0;
+    cs.pair_g0[p] = d0;
+    cs.pair_in[p] = inside;
+    Vec3 force{}, ft{};
+    double fn = 0, gap = 0;
+    if (in_contact && k > 0 && -g > d0) {
+      gap = -g - d0;
+      const double mu = cs.mu[static_cast<std::size_t>(m.block_region[m.node_block(n)]) * cs.nreg +
+                              m.block_region[b]];
+      const double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * m.mass[n]) : 0.0;
+      fn = std::max(0.0, k * gap - cdamp * vn_rel);
+      // tangential spring in the current tangent plane (magnitude kept), Coulomb cap
+      ft = cs.pair_ft[p];
+      const double ft2 = dot(ft, ft);
+      ft -= dot(ft, nrm) * nrm;
+      const double fp2 = dot(ft, ft);
+      if (fp2 > 0) ft *= std::sqrt(ft2 / fp2);
+      const Vec3 du_t = du - dot(du, nrm) * nrm;
+      ft -= kt * du_t;
+      // the tangential dashpot of the same damping ratio (DEM practice: both directions damped)
+      const Vec3 ft_total = zeta > 0 ? ft - (2.0 * zeta * std::sqrt(kt * m.mass[n]) / dt) * du_t : ft;
+      const double cap = mu * fn;
+      double mag = norm(ft);
+      if (mag > cap) ft *= (cap > 0 ? cap / mag : 0.0);
+      Vec3 fdrag = ft_total;
+      mag = norm(fdrag);
+      if (mag > cap) fdrag *= (cap > 0 ? cap / mag : 0.0);
+      force = fn * nrm + fdrag;
+      ++active;
+      pen_ratio = std::max(pen_ratio, gap / m.block_size[b]);  // (the ignored part not counted)
+    }
+    const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
+    // work done on the contact by the relative motion: -F . du (F acts on the node)
+    const double dd_ = -0.5 * dot(f_old + force, du) - (e_new - e_old);
+    cs.pair_diss[p] += dd_;
+    cs.pair_fn[p] = fn;
+    cs.pair_ft[p] = ft;
+    cs.pair_gap[p] = gap;
+    cs.pair_force[p] = force;
+    cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
+  }
+  cs.active = active;
+  cs.active_max = std::max(cs.active_max, active);
+  cs.max_pen_ratio = std::max(cs.max_pen_ratio, pen_ratio);
+  // Gathers in a fixed order: node side, then face side.
+  const auto nd = static_cast<std::int64_t>(cs.node_start.size()) - 1;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t d = 0; d < nd; ++d) {
+    Vec3 acc{};
+    for (auto p = cs.node_start[d]; p < cs.node_start[d + 1]; ++p) acc += cs.pair_force[p];
+    m.f[cs.pair_node[cs.node_start[d]]] += acc;
+  }
+  const auto nfn = static_cast<std::int64_t>(cs.fnode.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t j = 0; j < nfn; ++j) {
+    Vec3 acc{};
+    for (auto e = cs.fnode_offset[j]; e < cs.fnode_offset[j + 1]; ++e) {
+      const std::int32_t ent = cs.fnode_entry[e];
+      acc += cs.pair_w[ent / 4][ent % 4] * cs.pair_force[ent / 4];
+    }
+    m.f[cs.fnode[j]] -= acc;
+  }
+}
+
+double contact_energy(const ContactSet& cs) {
+  double e = 0;
+  for (std::size_t p = 0; p < cs.pair_gap.size(); ++p) {
+    const double k = cs.pair_k[p], kt = cs.shear_ratio * k;
+    e += 0.5 * k * cs.pair_gap[p] * cs.pair_gap[p] +
+         (kt > 0 ? 0.5 * dot(cs.pair_ft[p], cs.pair_ft[p]) / kt : 0.0);
+  }
+  return e;
+}
+
+double contact_dissipated(const ContactSet& cs) {
+  double d = cs.diss_closed;
+  for (double x : cs.pair_diss) d += x;
+  return d;
+}
+
+}  // namespace cdem

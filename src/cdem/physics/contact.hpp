@@ -1,0 +1,121 @@
+// General contact (SPEC 1.5, docs/theory.md "General contact"): fragments, released faces and the
+// model's boundary faces push on each other and never pass through.
+//
+// Broad phase: the candidate faces (the model's boundary faces and the faces of interfaces with a
+// released spring point) are hashed by their bounding boxes, grown by a skin s plus half their
+// block's size, into a uniform cell grid; every node of a candidate face looks up its own cell.
+// A (node, block) pair is kept when the node lies in the grown box of a candidate face of the
+// block and the two belong to different bodies (blocks connected through points that are not
+// released), or either lies on a released face; never the node's own block, nor a block holding
+// a node it is bonded to (tied, or joined by a broken point: that point is their contact until
+// it is released). Linear in the number of candidates (counting sort into the hash table). The
+// list is rebuilt when a candidate node has moved more than s/2 since the last build (checked
+// every step: no face and node can meet unseen) or when spring points were released.
+//
+// Narrow phase, node against block (its candidate faces: triangles in 3D, edges in 2D). With
+// g_k = (x - p_k) . n_k the node's signed distance to the plane of face k (outward unit normal
+// n_k), the node is inside the block when g_k <= 0 for every face (the blocks are convex), and its
+// penetration is d = -max g_k over the block's candidate faces: the distance to the nearest face
+// it can leave by. d is continuous as the nearest face changes, so the penalty energy
+// k d^2 / 2 is too (a per-face test would switch forces on and off at edges and make energy).
+// Penalty, compression only, along that face's normal n:
+// F_n = k (d - d0) - c v_n (>= 0; c = 2 zeta sqrt(k m) the optional damping; d0 the ignored
+// penetration: when a node comes inside a block deeper than twice its normal approach in one
+// step, 2 |v_n| dt, the excess is not pushed back at once, which would be an impulse from nothing;
+// d0 then only shrinks as the node moves out, as explicit codes treat initial penetrations),
+// Coulomb friction on an incremental tangential spring k_t = k G/E: F_t += -k_t du_t,
+// |F_t| <= mu F_n. The node gets F = F_n n + F_t, the face's nodes -w_i F with w the
+// barycentric coordinates of the node's projection (clamped to the face). The stiffness k is the
+// contact node's share of the stability budget (tied mode: eta omega_max^2 m / (2 c_max), the
+// opened points' stiffness; springs mode: the mean k_n A_c of the node's spring points, counted in
+// the springs' step), the smaller of the node's and the block nodes', so contact does not lower
+// the time step. Dissipation per pair: the work done on it minus the change of its elastic
+// energy F_n^2 / 2k + |F_t|^2 / 2k_t (friction, damping).
+//
+// Determinism: the pairs are sorted by (node, block); forces are computed per pair in parallel
+// and gathered per node in pair order (node side and block side in two passes): bitwise the same
+// for any thread count. Buffers grow only at a rebuild.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+// Plain settings ([contact] of the case).
+struct ContactSettings {
+  bool enabled = false;
+  double skin = 0;             // m; 0: 0.25 x the median block size
+  double friction = -1;        // mu; < 0: tan(phi_r) of the interface material of the region pair
+  double damping_ratio = 0;    // zeta
+  double stiffness_factor = 1; // x the budget stiffness (<= 1)
+};
+
+struct ContactSet {
+  ContactSettings cfg;
+  bool enabled = false;
+  double skin = 0;
+  int dim = 0;
+  // per block face slot 4 b + k (k < 4): the interface it belongs to, -1 for a boundary face
+  std::vector<std::int32_t> face_iface;
+  std::vector<double> kc;        // per node: penalty stiffness (N/m)
+  std::vector<double> mu;        // friction coefficient per (region, region), nreg x nreg
+  int nreg = 0;
+  double shear_ratio = 0.4;      // k_t / k (G/E of the rock)
+
+  // ---- candidates and pairs (rebuilt) ----
+  std::vector<std::int32_t> cand_faces;  // face slots
+  std::vector<std::int32_t> cand_nodes;  // ascending
+  std::vector<Vec3> x_build;             // per candidate node, at the last build
+  std::vector<std::int32_t> pair_node, pair_block;
+  std::vector<double> pair_fn;           // N, >= 0
+  std::vector<Vec3> pair_ft;             // tangential force on the node (N)
+  std::vector<Vec3> pair_force;          // this step's force on the node (N)
+  std::vector<std::array<double, 4>> pair_w;  // this step's weights of the block's nodes
+  std::vector<std::uint8_t> pair_in;     // the node was inside the block at the last step
+  // this step's geometry of each pair: the gap to the nearest candidate face, its normal, and
+  // how deep inside the block the node is (-1: outside); a node inside several blocks of one
+  // body (exactly on their shared face or edge) is in contact with the one it is deepest in only
+  std::vector<double> pair_g, pair_margin, pair_score;
+  std::vector<std::int8_t> pair_kf, pair_kf_now;  // the contact face (local; -1 none): kept from
+                                                  // step to step while in contact, and this step's
+  std::vector<Vec3> pair_n;
+  std::vector<double> pair_k;            // penalty stiffness of the pair (N/m)
+  std::vector<double> pair_diss;         // J dissipated by the pair
+  std::vector<double> pair_gap;          // this step's effective penetration (m, >= 0; 0 apart)
+  std::vector<double> pair_g0;           // penetration ignored, d0 above (m): the depth a node
+                                         // already had when it came inside beyond what its
+                                         // approach explains (an initial overlap, or a node that
+                                         // sank in while a broken point held it); only shrinks
+  // gathers: node side (pairs of one node are consecutive)
+  std::vector<std::int32_t> node_start;  // start of each distinct node's pairs (+ end)
+  // block side: entries (4 p + i) per block node, CSR over distinct block nodes
+  std::vector<std::int32_t> fnode, fnode_offset, fnode_entry;
+  // work space of the rebuild
+  std::vector<std::int32_t> body, bucket_offset, bucket_entry, scratch;
+  std::vector<std::uint8_t> on_released;
+  std::vector<std::uint8_t> face_cand;   // per face slot: 1 when a candidate face
+
+  // ---- state and statistics ----
+  std::int64_t released_seen = -1;       // Model::released_points at the last build
+  double diss_closed = 0;                // dissipation of pairs dropped at rebuilds (J)
+  std::int64_t rebuilds = 0, active = 0, active_max = 0;
+  double max_pen_ratio = 0;              // max over the run of penetration / face block size
+  std::size_t pair_capacity() const { return pair_node.capacity(); }
+};
+
+// Set-up from the model (its interface materials give the friction, the stiffness budget as in
+// ties.hpp / springs.hpp). omega2_max: the blocks' omega_max^2 (tied mode), 0 in springs mode.
+ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta, double omega2_max);
+
+// One step's contact forces added to m.f (call after the block forces). Rebuilds the pairs when
+// due. dt: the step (for the tangential increment and the damping).
+void contact_forces(Model& m, ContactSet& cs, double dt);
+
+// Elastic energy stored in the contacts (J) and their dissipation so far (J).
+double contact_energy(const ContactSet& cs);
+double contact_dissipated(const ContactSet& cs);
+
+}  // namespace cdem

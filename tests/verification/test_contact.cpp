@@ -1,0 +1,447 @@
+// Verification of general contact (SPEC 1.5, physics/contact.hpp; docs/theory.md "General
+// contact", numbers in docs/verification_contact.md): head-on impact (momentum, energy,
+// penetration, separation), sliding on an incline in 2D and 3D (stick below the friction angle,
+// g (sin - mu cos) above), a 200 m/s fragment against a wall (with a tiny skin too), the rebuild
+// trigger, a stack settling under gravity, 1 vs 2 threads, and a released pair caught again.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "cdem/physics/contact.hpp"
+#include "cdem/solver/simulation.hpp"
+#include "verification/model_builders.hpp"
+
+namespace cdem {
+namespace {
+
+using namespace test_models;
+
+// Appends mesh b to mesh a (a separate body: no shared vertices); b's region and face set names
+// get `suffix`.
+Mesh merge(Mesh a, const Mesh& b, const std::string& suffix) {
+  const auto nv = static_cast<std::int32_t>(a.vertices.size());
+  const auto nr = static_cast<std::int32_t>(a.region_names.size());
+  a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (const auto& r : b.region_names) a.region_names.push_back(r + suffix);
+  for (std::size_t e = 0; e < b.num_elements(); ++e) {
+    a.elem_type.push_back(b.elem_type[e]);
+    auto v = b.elem_vertices[e];
+    for (auto& x : v)
+      if (x >= 0) x += nv;
+    a.elem_vertices.push_back(v);
+    a.elem_region.push_back(b.elem_region[e] + nr);
+    a.elem_tag.push_back(static_cast<std::int64_t>(a.elem_tag.size() + 1));
+  }
+  for (auto fs : b.face_sets) {
+    fs.name += suffix;
+    for (auto& f : fs.facets)
+      for (auto& x : f.v)
+        if (x >= 0) x += nv;
+    a.face_sets.push_back(fs);
+  }
+  return a;
+}
+
+Mesh body(int dim, int n, double size, Vec3 origin) {
+  return dim == 3 ? tet_box(n, n, n, size, size, size, origin) : quad_grid(n, n, size, size, origin);
+}
+
+Case contact_case(const std::vector<BlockMaterial>& mats, const InterfaceMaterial& im,
+                  double friction) {
+  Case c = make_case(mats, {im});
+  c.contact.enabled = true;
+  c.contact.friction = friction;
+  return c;
+}
+
+// Mean velocity (mass-weighted) and position of the blocks of region r.
+struct BodyState {
+  Vec3 v, x;
+  double mass = 0;
+};
+BodyState body_state(const Model& m, int region) {
+  BodyState s;
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    if (m.block_region[b] != region) continue;
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+      s.mass += m.mass[n];
+      s.v += m.mass[n] * m.v[n];
+      s.x += m.mass[n] * m.x[n];
+    }
+  }
+  s.v = s.v / s.mass;
+  s.x = s.x / s.mass;
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Head-on impact of two cubes (0.1 m, 2 x 2 x 2 Kuhn cells, or 2 x 2 quads) at +-1 m/s across a
+// 1 mm gap, frictionless, unbreakable interfaces, no damping:
+//  - momentum: contact forces are equal and opposite (the node's F, the face nodes' -w F with
+//    sum w = 1), so the total momentum is conserved to round-off: 1e-10 of sum m |v|;
+//  - penetration: the impact stress is rho c_p v (two bodies at relative speed 2v: the
+//    interface moves at 0, each side sees v), shared by the contact nodes of the face
+//    (area A / nodes) against their stiffness k: d = rho c_p v A_node / k. Checked at most 2 x
+//    that (the penalty spring overshoots the quasi-static share during the first contact wave);
+//  - energy: kinetic + strain after the bodies separate within 2 % of the initial kinetic
+//    energy (the rest goes to the contact's switching and stays booked: the balance error is
+//    checked at 1 %). The second body is offset sideways by 0.13 of a cell: with the two meshes
+//    exactly aligned every contact node lands on a vertex of the other body, inside all the
+//    blocks around it, the degenerate case of node-to-face contact; that case is run too and
+//    reported, with its measured error (2D -2.5 %, 3D +24 %) checked below 30 % and no blow-up
+//    (docs/verification_contact.md);
+//  - the bodies separate (their mean velocities reverse).
+// ---------------------------------------------------------------------------------------------
+void impact(int dim, double offset) {
+  const double size = 0.1, gap = 1e-3, v0 = 1.0;
+  const auto mat_a = rock(1e10, 0.25, 2500, "a");
+  auto mat_b = rock(1e10, 0.25, 2500, "b");
+  Mesh mesh = merge(body(dim, 2, size, {0, 0, 0}), body(dim, 2, size, {size + gap, offset, dim == 3 ? 0.7 * offset : 0.0}), "");
+  mesh.region_names = {"a", "b"};
+  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < mesh.num_elements() / 2 ? 0 : 1;
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "impact");
+  for (std::size_t n = 0; n < model.n_nodes(); ++n)
+    model.v[n] = {model.block_region[model.node_block(n)] == 0 ? v0 : -v0, 0, 0};
+  Case c = contact_case({mat_a, mat_b}, glue, 0.0);
+  Simulation sim(std::move(model), c);
+  auto momentum = [&]() {
+    Vec3 p{};
+    double s = 0;
+    for (std::size_t n = 0; n < sim.model().n_nodes(); ++n) {
+      p += sim.model().mass[n] * sim.model().v[n];
+      s += sim.model().mass[n] * norm(sim.model().v[n]);
+    }
+    return std::make_pair(p, s);
+  };
+  const auto [p0, s0] = momentum();
+  sim.step(true);
+  const double e0 = sim.energy().mechanical();
+  double pen = 0, max_err = 0, dp = 0;
+  const double t_end = 3 * size / mat_a.cp() + gap / v0;  // impact + a few wave transits
+  while (sim.time() < t_end) {
+    sim.step(true);
+    max_err = std::max(max_err, sim.energy().error);
+    dp = std::max(dp, norm(momentum().first - p0));
+    for (double g : sim.contact().pair_gap) pen = std::max(pen, g);
+  }
+  // run on until they are apart
+  while (sim.time() < 3 * t_end) sim.step(true);
+  const EnergyBalance e = sim.energy();
+  const double e_after = e.kinetic + e.block_strain + e.spring_strain;
+  const BodyState a = body_state(sim.model(), 0), b = body_state(sim.model(), 1);
+  const double k = sim.contact().pair_k.empty() ? 0 : sim.contact().pair_k.front();
+  const double a_node = dim == 3 ? size * size / 9.0 : size / 3.0;  // face area per face node
+  const double d_bound = mat_a.density * mat_a.cp() * v0 * a_node / k;
+  std::printf("[contact impact] %dD offset %.3g m: dt %.3g s, %lld steps, %lld rebuilds: momentum drift %.2e, "
+              "max penetration %.3g m (bound %.3g m, %.2e of the block size), energy after / "
+              "before %.4f, balance error max %.2e, mean velocities %.3f / %.3f m/s\n",
+              dim, offset, sim.dt(), static_cast<long long>(sim.steps()),
+              static_cast<long long>(sim.contact().rebuilds), dp / s0, pen, d_bound, pen / size,
+              e_after / e0, max_err, a.v.x, b.v.x);
+  EXPECT_LT(dp, 1e-10 * s0);
+  EXPECT_GT(pen, 0.0);
+  EXPECT_LT(pen, 2 * d_bound);
+  EXPECT_NEAR(e_after / e0, 1.0, offset == 0.0 ? 0.3 : 0.02);
+  EXPECT_LT(max_err, 0.01);
+  EXPECT_LT(a.v.x, 0.0);  // bounced back
+  EXPECT_GT(b.v.x, 0.0);
+  EXPECT_LT(a.x.x + 0.5 * size, b.x.x - 0.5 * size + 1e-9);  // apart
+}
+
+TEST(ContactImpact, HeadOn2D) { impact(2, 0.0); impact(2, 0.013); }
+TEST(ContactImpact, HeadOn3D) { impact(3, 0.0); impact(3, 0.013); }
+
+// ---------------------------------------------------------------------------------------------
+// A block resting on a fixed base, gravity tilted by theta (the same as an incline of slope
+// theta), friction mu = 0.5 (tan 26.6 deg). theta = 20 deg: it sticks (mean speed along the slope
+// after 40 ms below 1 mm/s: the elastic settling only). theta = 40 deg: it slides with
+// a = g (sin theta - mu cos theta) = 2.552 m/s^2, measured from its mean velocity between 10 and
+// 40 ms (after the settling onto the base) within 2 %: the friction force is mu F_n at every
+// sliding contact node, and the normal forces sum to m g cos theta once the bounce has died out
+// (light contact damping, zeta = 0.2, removes the bounce without a drag along the slope).
+// ---------------------------------------------------------------------------------------------
+double incline(int dim, double theta_deg) {
+  const double size = 0.1, mu = 0.5, gval = 9.81;
+  const auto base_m = rock(1e10, 0.25, 2500, "base");
+  const auto blk_m = rock(1e10, 0.25, 2500, "block");
+  Mesh mesh = merge(body(dim, 2, size, {0, 0, 0}), body(dim, 1, 0.5 * size, {0.25 * size, dim == 3 ? 0.25 * size : size, dim == 3 ? size : 0}), "_blk");
+  mesh.region_names = {"base", "block"};
+  const std::size_t nbase = dim == 3 ? 48 : 4;
+  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < nbase ? 0 : 1;
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Case c = contact_case({base_m, blk_m}, glue, mu);
+  c.contact.damping_ratio = 0.2;
+  const double th = theta_deg * kPi / 180;
+  c.gravity = dim == 3 ? Vec3{gval * std::sin(th), 0, -gval * std::cos(th)}
+                       : Vec3{gval * std::sin(th), -gval * std::cos(th), 0};
+  BoundaryCondition fix;
+  fix.faces = "bottom";
+  fix.type = BoundaryType::Fixed;
+  c.boundaries = {fix};
+  Simulation sim(build_model(mesh, {base_m, blk_m}, {glue}, "incline"), c);
+  double v10 = 0;
+  while (sim.time() < 0.04) {
+    sim.step();
+    if (v10 == 0 && sim.time() >= 0.01) v10 = body_state(sim.model(), 1).v.x;
+  }
+  const double v40 = body_state(sim.model(), 1).v.x;
+  const double a = (v40 - v10) / (sim.time() - 0.01);
+  const double expect = std::max(0.0, gval * (std::sin(th) - mu * std::cos(th)));
+  std::printf("[contact incline] %dD theta %.0f deg: speed at 40 ms %.4g m/s, acceleration %.4f "
+              "m/s^2 (expected %.4f), %lld steps, max contact pairs %lld\n",
+              dim, theta_deg, v40, a, expect, static_cast<long long>(sim.steps()),
+              static_cast<long long>(sim.contact().active_max));
+  return theta_deg < 26 ? v40 : a / expect;
+}
+
+TEST(ContactFriction, Incline2D) {
+  EXPECT_LT(std::abs(incline(2, 20)), 1e-3);
+  EXPECT_NEAR(incline(2, 40), 1.0, 0.02);
+}
+TEST(ContactFriction, Incline3D) {
+  EXPECT_LT(std::abs(incline(3, 20)), 1e-3);
+  EXPECT_NEAR(incline(3, 40), 1.0, 0.02);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A 5 cm fragment at 200 m/s towards a fixed wall 1 cm away: it must not pass through, with the
+// default skin and with a skin of 1e-4 m (1/50 of the distance it covers in a step, so the list
+// is rebuilt every step). Its leading face stays in front of the wall's face to within the
+// penetration bound (2 x rho c v A_node / k, as the impact test) and it leaves at negative speed.
+// ---------------------------------------------------------------------------------------------
+void fast_fragment(double skin) {
+  const double wall = 0.2, frag = 0.05, v0 = 200.0;
+  const auto wm = rock(1e10, 0.25, 2500, "wall");
+  const auto fm = rock(1e10, 0.25, 2500, "frag");
+  Mesh mesh = merge(tet_box(2, 2, 2, wall, wall, wall, {0, 0, 0}),
+                    tet_box(1, 1, 1, frag, frag, frag, {-frag - 0.01, 0.075, 0.075}), "_f");
+  mesh.region_names = {"wall", "frag"};
+  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Case c = contact_case({wm, fm}, glue, 0.0);
+  c.contact.skin = skin;
+  BoundaryCondition fix;
+  fix.faces = "right";
+  fix.type = BoundaryType::Fixed;
+  c.boundaries = {fix};
+  Model model = build_model(mesh, {wm, fm}, {glue}, "fragment");
+  for (std::size_t n = 0; n < model.n_nodes(); ++n)
+    if (model.block_region[model.node_block(n)] == 1) model.v[n] = {v0, 0, 0};
+  Simulation sim(std::move(model), c);
+  double lead = -1e9;
+  while (sim.time() < 4 * (0.01 / v0)) {
+    sim.step();
+    for (std::size_t n = 0; n < sim.model().n_nodes(); ++n)
+      if (sim.model().block_region[sim.model().node_block(n)] == 1) lead = std::max(lead, sim.model().x[n].x);
+  }
+  const double k = sim.contact().pair_k.empty() ? 1.0 : sim.contact().pair_k.front();
+  const double bound = 2 * fm.density * fm.cp() * v0 * (frag * frag / 4) / k;
+  const BodyState f = body_state(sim.model(), 1);
+  std::printf("[contact fragment] skin %.3g m: %lld rebuilds in %lld steps (%.3g m per step), "
+              "deepest point of the fragment %.4g m past the wall face (bound %.3g m), speed after "
+              "%.2f m/s\n",
+              sim.contact().skin, static_cast<long long>(sim.contact().rebuilds),
+              static_cast<long long>(sim.steps()), v0 * sim.dt(), lead, bound, f.v.x);
+  EXPECT_LT(lead, bound);
+  EXPECT_LT(f.v.x, 0.0);
+}
+
+TEST(ContactFast, FragmentAt200MetresPerSecond) {
+  fast_fragment(0.0);
+  fast_fragment(1e-4);
+}
+
+// The rebuild trigger itself: a candidate node moved by 0.49 skin leaves the list; by 0.51 skin
+// it is rebuilt at the next contact_forces call.
+TEST(ContactFast, RebuildTrigger) {
+  const auto mat = rock();
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Model m = make_model(tet_box(2, 2, 2, 1, 1, 1), mat, glue);
+  ContactSettings cfg;
+  cfg.enabled = true;
+  cfg.skin = 0.01;
+  ContactSet cs = setup_contact(m, cfg, 1.0, 1e10);
+  contact_forces(m, cs, 1e-6);
+  ASSERT_EQ(cs.rebuilds, 1);
+  const std::int32_t n = cs.cand_nodes.front();
+  m.x[n].x += 0.49 * cfg.skin;
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 1);
+  m.x[n].x += 0.02 * cfg.skin;  // now 0.51 skin from where it was at the build
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 2);
+  ++m.released_points;  // a released point: the candidates change
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 3);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A stack of three 5 cm cubes 1 mm apart above a fixed base, under gravity, contact damping
+// zeta = 0.3 and Cundall's local damping alpha_L = 0.3 (the settling option of SPEC 1.4; the
+// contact dashpots alone leave the stack rocking on its point contacts): they fall, settle and
+// stay. Aligned stack: the kinetic energy after 0.15 s below 1e-6 of the potential energy
+// released, the heights constant to 1 um over the last 20 ms, penetrations below 1e-4 of the
+// size (m g / k per node is ~1e-8 m), every cube above the one below it. The same stack with the
+// cubes shifted sideways by 0.13 of their size is run too: no cube passes into another (the
+// heights stay ordered one size apart, penetrations below 1e-4 of the size), but it does not
+// come to rest: the upper cubes keep sliding at a few cm/s on their corner contacts (measured
+// and reported; a known defect, docs/verification_contact.md).
+// ---------------------------------------------------------------------------------------------
+struct StackResult {
+  double kinetic_ratio = 0, dz = 0, pen = 0;
+  bool ordered = true;
+};
+StackResult stack(double shift) {
+  const double s = 0.05, gap = 1e-3;
+  std::vector<BlockMaterial> mats;
+  Mesh mesh = tet_box(2, 2, 1, 2 * s, 2 * s, s, {-0.5 * s, -0.5 * s, -s});
+  mesh.region_names = {"base"};
+  for (int k = 0; k < 3; ++k)
+    mesh = merge(mesh, tet_box(1, 1, 1, s, s, s, {shift * s * (k % 2), 0.5 * shift * s * k, gap + k * (s + gap)}),
+                 std::to_string(k));
+  for (const auto& r : mesh.region_names) {
+    mats.push_back(rock(1e10, 0.25, 2500, r));
+    mats.back().local_damping = 0.3;
+  }
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Case c = contact_case(mats, glue, 0.6);
+  c.contact.damping_ratio = 0.3;
+  c.gravity = {0, 0, -9.81};
+  BoundaryCondition fix;
+  fix.faces = "bottom";
+  fix.type = BoundaryType::Fixed;
+  c.boundaries = {fix};
+  Simulation sim(build_model(mesh, mats, {glue}, "stack"), c);
+  std::vector<double> z_late;
+  while (sim.time() < 0.15) {
+    sim.step(true);
+    if (z_late.empty() && sim.time() >= 0.13)
+      for (int r = 1; r <= 3; ++r) z_late.push_back(body_state(sim.model(), r).x.z);
+  }
+  const EnergyBalance e = sim.energy();
+  StackResult res;
+  for (int r = 1; r <= 3; ++r)
+    res.dz = std::max(res.dz, std::abs(body_state(sim.model(), r).x.z - z_late[r - 1]));
+  for (double g : sim.contact().pair_gap) res.pen = std::max(res.pen, g);
+  for (int r = 1; r < 3; ++r)
+    res.ordered = res.ordered &&
+                  body_state(sim.model(), r + 1).x.z > body_state(sim.model(), r).x.z + 0.99 * s;
+  res.kinetic_ratio = e.kinetic / std::abs(e.gravity_work);
+  std::printf("[contact stack] shift %.2f: kinetic %.3g of the energy released, height change over "
+              "the last 20 ms %.3g m, max penetration %.3g m, %lld pairs in contact, energy error "
+              "%.2e\n",
+              shift, res.kinetic_ratio, res.dz, res.pen, static_cast<long long>(sim.contact().active),
+              e.error);
+  return res;
+}
+
+TEST(ContactStack, SettlesUnderGravity) {
+  const double s = 0.05;
+  const StackResult aligned = stack(0.0);
+  EXPECT_LT(aligned.kinetic_ratio, 1e-6);
+  EXPECT_LT(aligned.dz, 1e-6);
+  EXPECT_LT(aligned.pen, 1e-4 * s);
+  EXPECT_TRUE(aligned.ordered);
+  const StackResult shifted = stack(0.13);
+  EXPECT_LT(shifted.pen, 1e-4 * s);
+  EXPECT_TRUE(shifted.ordered);
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1 vs 2 threads with contact active (the 3D impact): positions, velocities, forces and the
+// contact state bitwise identical.
+// ---------------------------------------------------------------------------------------------
+TEST(ContactDeterminism, ImpactOneAndTwoThreads) {
+  auto run = [](int threads) {
+    ScopedThreads th(threads);
+    const double size = 0.1;
+    const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
+    Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + 1e-3, 0.02, 0}), "");
+    mesh.region_names = {"a", "b"};
+    for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
+    const auto glue = interface_of(InterfaceLaw::MohrCoulomb, 1e5, 3e5, 30);
+    Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "impact");
+    for (std::size_t n = 0; n < model.n_nodes(); ++n)
+      model.v[n] = {model.block_region[model.node_block(n)] == 0 ? 5.0 : -5.0, 0.3, 0};
+    Case c = contact_case({mat_a, mat_b}, glue, 0.4);
+    Simulation sim(std::move(model), c);
+    for (int k = 0; k < 300; ++k) sim.step(k % 7 == 0);
+    return std::make_tuple(sim.model().x, sim.model().v, sim.contact().pair_force,
+                           sim.contact().active_max, sim.energy().contact_friction);
+  };
+  const auto a = run(1), b = run(2);
+  EXPECT_GT(std::get<3>(a), 0) << "no contact";
+  EXPECT_TRUE(same_bits(std::get<0>(a), std::get<0>(b)));
+  EXPECT_TRUE(same_bits(std::get<1>(a), std::get<1>(b)));
+  EXPECT_TRUE(same_bits(std::get<2>(a), std::get<2>(b)));
+  EXPECT_EQ(std::memcmp(&std::get<4>(a), &std::get<4>(b), sizeof(double)), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// A released pair that comes back together: two stacked quads (0.1 m) joined by a weak
+// Mohr-Coulomb interface, the lower one fixed at its base; the upper one is launched upward at
+// 2.5 m/s under a gravity of 50 m/s^2. It breaks the interface in tension, rises some 4 cm
+// (beyond the release distance, here 0.2 x 0.1 m: the points are released), falls back and
+// lands.
+// The contact catches it: its lowest point never goes below the lower block's top by more than
+// the impact penetration bound (2 x rho c v A_node / k, as above) and it bounces; the contact
+// force grows from zero at the touch, so no step changes it by more than the penalty spring's
+// own rate, k v dt per contact node (two in 2D), with a factor 3 for the elastic ringing.
+// ---------------------------------------------------------------------------------------------
+TEST(ContactHandover, ReleasedPairCaughtAgain) {
+  const double s = 0.1, v0 = 2.5, gval = 50.0;
+  const auto mat = rock(1e10, 0.25, 2500);
+  auto weak = interface_of(InterfaceLaw::MohrCoulomb, 1e3, 3e3, 30);
+  Mesh mesh = quad_grid(1, 2, s, 2 * s);
+  Case c = contact_case({mat}, weak, 0.3);
+  c.gravity = {0, -gval, 0};
+  c.release_distance_factor = 0.2;  // released 2 cm apart (the block rises ~4 cm)
+  BoundaryCondition fix;
+  fix.faces = "bottom";
+  fix.type = BoundaryType::Fixed;
+  c.boundaries = {fix};
+  Model model = make_model(mesh, mat, weak);
+  for (std::size_t n = 0; n < model.n_nodes(); ++n)
+    if (model.X(model.block_first_node[model.node_block(n)]).y > 0.5 * s) model.v[n] = {0, v0, 0};
+  Simulation sim(std::move(model), c);
+  double max_jump = 0, prev = 0, lowest = 1e9, k = 0, top = 0;
+  bool released = false, caught = false;
+  const double t_flight = 2 * v0 / gval;
+  while (sim.time() < 1.3 * t_flight) {
+    sim.step();
+    const Model& m = sim.model();
+    for (auto st : m.sp_state) released = released || st == kReleased;
+    double fy = 0;
+    for (const auto& f : sim.contact().pair_force) fy += std::abs(f.y);
+    if (fy > 0 && released) caught = true, k = sim.contact().pair_k.front();
+    if (released) max_jump = std::max(max_jump, std::abs(fy - prev));
+    for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+      const bool upper = m.X(m.block_first_node[b]).y > 0.5 * s;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+        if (upper && released) lowest = std::min(lowest, m.x[n].y);
+        if (!upper) top = std::max(top, m.x[n].y);
+      }
+    }
+  }
+  const double bound = 2 * mat.density * mat.cp() * v0 * (s / 2) / (k > 0 ? k : 1.0);
+  const BodyState up = body_state(sim.model(), 0);
+  std::printf("[contact handover] released %d, caught %d: lowest point of the upper block %.5g m "
+              "(lower block's top %.5g m, bound %.3g m), largest per-step change of the contact "
+              "force %.3g N (3 x 2 k v dt = %.3g N)\n",
+              released, caught, lowest, top, bound, max_jump, 3 * 2 * k * v0 * sim.dt());
+  (void)up;
+  EXPECT_TRUE(released);
+  EXPECT_TRUE(caught);
+  EXPECT_GT(lowest, s - bound);
+  EXPECT_LT(max_jump, 3 * 2 * k * v0 * sim.dt());
+}
+
+}  // namespace
+}  // namespace cdem

@@ -182,38 +182,79 @@ def grid_shape(n):
     return math.ceil(n / ncols), ncols
 
 
-def plot_field_grid(run, frames, quantity, out_dir, name, written):
-    """A grid of damage or von Mises pictures at several output times."""
+CHARGE_FACE = (0.62, 0.62, 0.66, 1.0)
+CHARGE_HATCH = "xxxx"
+
+
+def draw_charge(ax, polys, charge):
+    """The charge blocks (explosive blocks, or blocks mostly filled by a bar charge) drawn grey
+    and hatched over a field picture: their damage is not blast damage (their interfaces are
+    unbreakable), so they must not read as intact stemming. Returns a legend handle or None."""
+    if charge is None or not np.any(charge):
+        return None
+    drawn = False
+    for verts, ids in polys:
+        sel = charge[ids]
+        if sel.any():
+            ax.add_collection(PolyCollection(verts[sel], facecolors=CHARGE_FACE,
+                                             edgecolors="0.35", linewidths=0.3,
+                                             hatch=CHARGE_HATCH))
+            drawn = True
+    if not drawn:
+        return None
+    from matplotlib.patches import Patch
+    return Patch(facecolor=CHARGE_FACE, edgecolor="0.35", hatch=CHARGE_HATCH,
+                 label="charge blocks (not counted as rock)")
+
+
+def shared_scale(values, polys_list, pct=99.0, log_decades=3.0):
+    """One colour scale for the panels of one quantity: the top is the pct-th percentile of
+    every drawn value (the clipping shows as the colour bar's arrow), the bottom log_decades
+    decades below on a log scale (peak and residual stresses differ by orders of magnitude).
+    Returns (norm, top, vmax)."""
+    vis = [v[ids] for v, polys in zip(values, polys_list) if v is not None for _, ids in polys]
+    vis = np.concatenate(vis) if vis else np.zeros(1)
+    vis = vis[np.isfinite(vis)]
+    vmax = float(vis.max()) if vis.size else 1.0
+    top = float(np.percentile(vis, pct)) if vis.size else 1.0
+    if not top > 0:
+        top = vmax if vmax > 0 else 1.0
+    return mcolors.LogNorm(top * 10 ** -log_decades, top, clip=False), top, vmax
+
+
+def plot_field_grid(run, frames, quantity, out_dir, name, written, charge=None):
+    """A grid of damage or von Mises pictures at several output times, one colour scale for
+    all panels (von Mises: log scale, clipped at the 99th percentile of every panel)."""
     nrows, ncols = grid_shape(len(frames))
     views = [fr.view() for fr in frames]
     box = view_box([v.polys for v in views], frames[-1], views[-1].idx)
     aspect = box_aspect(box)
-    shared = quantity == "damage"
     fig, axes = plt.subplots(nrows, ncols, squeeze=False, constrained_layout=True,
-                             figsize=figsize_for(ncols, nrows, aspect, 3.6, not shared, shared))
-    mappable = None
+                             figsize=figsize_for(ncols, nrows, aspect, 3.6, False, True))
+    if quantity == "damage":
+        values = [cell_values(fr, "damage") for fr in frames]
+        norm, cmap, extend = mcolors.Normalize(0, 1), DAMAGE_CMAP, "neither"
+    else:
+        values = [cell_values(fr, "von_mises", 1e-6) for fr in frames]
+        norm, top, vmax = shared_scale(values, [v.polys for v in views])
+        cmap = plt.get_cmap(VM_CMAP).copy()
+        cmap.set_under("white")
+        extend = "both" if vmax > top else "min"
+    mappable, handle = None, None
     for k, ax in enumerate(axes.ravel()):
         if k >= len(frames):
             ax.set_visible(False)
             continue
-        fr = frames[k]
-        v = views[k]
+        fr, v, vals = frames[k], views[k], values[k]
         polys = v.polys
-        if quantity == "damage":
-            vals = cell_values(fr, "damage")
-            norm = mcolors.Normalize(0, 1)
-            cmap = DAMAGE_CMAP
-        else:
-            vals = cell_values(fr, "von_mises", 1e-6)
-            vis = np.concatenate([vals[ids] for _, ids in polys]) if polys else np.zeros(1)
-            top = float(np.nanpercentile(vis, 97)) if vis.size else 1.0
-            norm = mcolors.Normalize(0, top if top > 0 else 1.0)
-            cmap = VM_CMAP
         if vals is None or not polys:
             ax.text(0.5, 0.5, "no data", ha="center", va="center", transform=ax.transAxes)
             ax.set_title(fmt_time(fr.time))
             continue
-        m = draw_polys(ax, polys, vals, cmap, norm)
+        mappable = draw_polys(ax, polys, vals, cmap, norm)
+        hc = draw_charge(ax, polys, charge)
+        if hc is not None and handle is None:
+            handle, handle_ax = hc, ax
         draw_cracks(ax, v.segs, lw=0.3)
         set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
         ax.set_title(fmt_time(fr.time))
@@ -221,19 +262,21 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written):
             ax.set_ylabel("")
         if k // ncols < nrows - 1 and k + ncols < len(frames):
             ax.set_xlabel("")
+    if mappable is not None:
+        cb = colorbar(fig, mappable, ax=axes.ravel().tolist(), shrink=0.8, extend=extend)
         if quantity == "damage":
-            mappable = m
+            cb.set_label("damage" if nrows * aw_of(fig, ncols) / aspect < 4.5
+                         else "damage (broken fraction of interface area)")
         else:
-            cb = colorbar(fig, m, ax=ax, shrink=0.85, extend="max")
-            cb.set_label("von Mises (MPa)")
-    if quantity == "damage" and mappable is not None:
-        cb = colorbar(fig, mappable, ax=axes.ravel().tolist(), shrink=0.8)
-        cb.set_label("damage" if nrows * aw_of(fig, ncols) / aspect < 4.5
-                     else "damage (broken fraction of interface area)")
+            cb.set_label(f"von Mises (MPa, log scale), clipped at {top:.3g} "
+                         f"(99th percentile; max {vmax:.3g})")
+    if handle is not None:
+        handle_ax.legend(handles=[handle], loc="lower left", fontsize=7, framealpha=0.85)
     where = f", {views[-1].where}" if views[-1].where else ""
     what = "Damage" if quantity == "damage" else "von Mises stress"
+    scale = "" if quantity == "damage" else "; one colour scale for all panels"
     fig.suptitle(f"{what}{where}: {run.label}{magnify_note(frames[-1])}\n"
-                 "black lines: cracks (broken interfaces)")
+                 f"black lines: cracks (broken interfaces){scale}")
     return save(fig, out_dir, name, written)
 
 
@@ -241,7 +284,7 @@ def magnify_note(frame):
     return "" if frame.magnify == 1.0 else f" (displacements x{frame.magnify:g})"
 
 
-def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
+def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None, charge=None):
     """The last damage picture, large (or into a given axes for the comparison)."""
     v = frame.view()
     polys = v.polys
@@ -252,16 +295,20 @@ def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None):
         fig, ax = plt.subplots(figsize=figsize_for(1, 1, aspect, 6.5, True, False, 2, False),
                                constrained_layout=True)
     vals = cell_values(frame, "damage")
+    handle = None
     if vals is None or not polys:
         ax.text(0.5, 0.5, "no damage data", ha="center", va="center", transform=ax.transAxes)
         m = None
     else:
         m = draw_polys(ax, polys, vals, DAMAGE_CMAP, mcolors.Normalize(0, 1))
+        handle = draw_charge(ax, polys, charge)
         draw_cracks(ax, v.segs, lw=0.6 if own else 0.4)
         set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
     where = f", {v.where}" if v.where else ""
     fd = run.summary.get("fracture_degree")
     fdt = f", fracture degree {100 * fd:.1f} %" if isinstance(fd, (int, float)) else ""
+    if handle is not None:
+        ax.legend(handles=[handle], loc="lower left", fontsize=8)
     if own:
         ax.set_title(f"Damage at {fmt_time(frame.time)}{where}: {run.label}{magnify_note(frame)}\n"
                      f"black lines: cracks{fdt}")
@@ -286,8 +333,26 @@ def fragment_colors(ids):
     return rgba
 
 
-def plot_fragments_final(run, frame, out_dir, written):
-    """The blocks of the last output coloured by fragment (needs the fragment_id array)."""
+def fragment_count(run, frame):
+    """(count, counted ids) of the fragments of a field output, the way fragments.csv and
+    summary.json count them (rock fragments; charge blocks have their own fragment_id in the
+    fields but are not fragments). Without fragments.csv: the distinct ids of the field."""
+    tab = run.fragments_at(frame.path)
+    if tab is not None and isinstance(tab.get("id"), np.ndarray):
+        ids = tab["id"].astype(np.int64)
+        return int(ids.size), ids
+    fid = frame.cell("fragment_id")
+    if fid is None:
+        return None, None
+    ids = np.unique(np.asarray(fid).astype(np.int64))
+    ids = ids[ids >= 0]
+    return int(ids.size), ids
+
+
+def plot_fragments_final(run, frame, out_dir, written, charge=None):
+    """The blocks of the last output coloured by fragment (needs the fragment_id array). The
+    title gives the fragment count of fragments.csv (the summary's); blocks whose id is not a
+    counted fragment (the charge) are drawn hatched."""
     fid = frame.cell("fragment_id")
     if fid is None:
         return None
@@ -299,16 +364,24 @@ def plot_fragments_final(run, frame, out_dir, written):
     box = view_box([polys], frame, v.idx)
     fig, ax = plt.subplots(figsize=figsize_for(1, 1, box_aspect(box), 6.5, False, False, 2, False),
                            constrained_layout=True)
+    n, counted = fragment_count(run, frame)
+    not_counted = ~np.isin(fid, counted) if counted is not None else np.zeros(fid.size, bool)
+    if charge is not None:
+        not_counted |= charge
     rgba = fragment_colors(fid)
     for verts, ids in polys:
         ax.add_collection(PolyCollection(verts, facecolors=rgba[ids], edgecolors=rgba[ids],
                                          linewidths=0.15))
+    handle = draw_charge(ax, polys, not_counted)
     draw_cracks(ax, v.segs, lw=0.3)
     set_limits(ax, box, v.xlabel, v.ylabel, v.flip)
-    n = int(np.unique(fid[fid >= 0]).size)
+    if handle is not None:
+        handle.set_label("charge blocks (not fragments)")
+        ax.legend(handles=[handle], loc="lower left", fontsize=8)
     where = f", {v.where}" if v.where else ""
+    count = f"{n} fragments (the count of fragments.csv and summary.json)" if n is not None else ""
     ax.set_title(f"Fragments at {fmt_time(frame.time)}{where}: {run.label}{magnify_note(frame)}\n"
-                 f"{n} fragments; grey: the largest (the rock mass), colours: the others")
+                 f"{count}\ngrey: the largest (the rock mass); colours: the others")
     return save(fig, out_dir, "fragments_final.png", written)
 
 
@@ -512,6 +585,32 @@ def plot_error(ax, t, err, color, label=None):
     ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
+def per_metre_suffix(runs):
+    """'/m' when every run is plane strain (energies per metre of thickness), a note when some
+    are, '' otherwise."""
+    flags = [bool(getattr(r, "per_metre", False)) for r in runs]
+    if flags and all(flags):
+        return "/m"
+    return "; 2D runs per metre" if any(flags) else ""
+
+
+def explosive_work_label(e, drop=0.01):
+    """The legend entry of the explosive work when it falls after its peak by more than `drop`
+    of it: then the rock does work on the products (the cavity is pushed back), and the work
+    done by the charge flows back into them; None when it does not fall."""
+    w = e.get("explosive_work")
+    if w is None or w.size < 2:
+        return None
+    i = int(np.nanargmax(w))
+    peak, last = float(w[i]), float(w[-1])
+    if not peak > 0 or peak - last <= drop * peak:
+        return None
+    tf, tu = time_scale(float(e["time"].max()))
+    return (f"explosive work (input); falls {100 * (peak - last) / peak:.0f} % from its peak at "
+            f"{e['time'][i] * tf:.3g} {tu}:\nthe rock pushes the products back, work flows "
+            "back into them")
+
+
 def plot_energy(runs, out_dir, written):
     runs_with = [r for r in runs if r.energy is not None]
     if not runs_with:
@@ -527,9 +626,12 @@ def plot_energy(runs, out_dir, written):
                        np.nanmax(np.abs(e[k])) for k, *_ in ENERGY_TERMS if k in e))]
         vmax = max([np.nanmax(np.abs(e[c])) for c, *_ in present] or [1.0])
         sc, unit = energy_scale(vmax)
-        fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 8), sharex=True,
+        fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 8), sharex=True,
                                      gridspec_kw={"height_ratios": [2.2, 1]}, constrained_layout=True)
+        unit += per_metre_suffix([r])
         for c, l, col, ls in present:
+            if c == "explosive_work":
+                l = explosive_work_label(e) or l
             a1.plot(t, e[c] * sc, color=col, ls=ls, lw=1.5, label=l)
         a1.set_ylabel(f"energy ({unit})")
         a1.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
@@ -538,10 +640,10 @@ def plot_energy(runs, out_dir, written):
             plot_error(a2, t, e["error"], "black")
             fe = r.summary.get("energy_error")
             if isinstance(fe, (int, float)):
-                a2.set_title(f"Balance error |balance| / max(|work in|, mechanical energy): "
-                             f"final {fe:.2g}")
+                a2.set_title(f"Balance error |balance| / max(|work in|, mech. energy): final {fe:.2g}",
+                             fontsize=10)
             else:
-                a2.set_title("Balance error |balance| / max(|work in|, mechanical energy)")
+                a2.set_title("Balance error |balance| / max(|work in|, mech. energy)", fontsize=10)
         a2.set_ylabel("relative error")
         a2.set_xlabel(f"time ({tu})")
         a2.set_xlim(0, tmax * tf)
@@ -559,6 +661,7 @@ def plot_energy(runs, out_dir, written):
             series[(r.label, g)] = v
             vmax = max(vmax, float(np.nanmax(np.abs(v))) if v.size else 0)
     sc, unit = energy_scale(vmax)
+    unit += per_metre_suffix(runs_with)
     fig, axes = plt.subplots(2, 3, figsize=(15, 8.5), sharex=True, constrained_layout=True)
     colors = run_colors(len(runs_with))
     for ax, (g, _) in zip(axes.ravel(), groups):
@@ -619,8 +722,11 @@ def grading_data(run):
     return None
 
 
-def plot_grading(runs, out_dir, written, notes):
-    data = [(r, grading_data(r)) for r in runs]
+def plot_grading(runs, out_dir, written, notes, yardstick=None, name="grading.png", curves=None):
+    """The grading curves of the runs (d40, d80 marked); with `yardstick` (a
+    yardsticks.KuzRam) the Kuz-Ram (Rosin-Rammler) and Swebrec curves of the design beside
+    them; `curves` replaces the runs' own grading data ([(run, (size, passing, source))])."""
+    data = curves if curves is not None else [(r, grading_data(r)) for r in runs]
     data = [(r, d) for r, d in data if d is not None]
     why = "no grading data (no grading curve or d10..d90 in summary.json, no grading.csv)"
     if not data:
@@ -652,6 +758,17 @@ def plot_grading(runs, out_dir, written, notes):
                                 xytext=(7, -13), fontsize=9, color=colors[i],
                                 bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none",
                                           alpha=0.8))
+    if yardstick is not None:
+        lo = min(float(allsize.min()) if allsize.size else yardstick.x50, yardstick.x50) / 5
+        hi = max(float(allsize.max()) if allsize.size else yardstick.x50, yardstick.xmax) * 1.05
+        xs = np.geomspace(max(lo, 1e-4), hi, 300)
+        ax.plot(xs, yardstick.passing(xs), color="0.25", ls="--", lw=1.4,
+                label=f"Kuz-Ram, Rosin-Rammler (x50 {yardstick.x50:.3g} m, n {yardstick.n:.2f})")
+        sw = yardstick.passing(xs, "swebrec")
+        if sw is not None:
+            ax.plot(xs, sw, color="0.25", ls=":", lw=1.6,
+                    label=f"Swebrec, KCO (xmax {yardstick.xmax:.3g} m, b {yardstick.b:.2f})")
+        allsize = np.concatenate([allsize, xs[[0, -1]]])
     if allsize.size and allsize.max() / allsize.min() > 20:
         ax.set_xscale("log")
         ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
@@ -661,8 +778,8 @@ def plot_grading(runs, out_dir, written, notes):
     ax.set_xlabel("fragment size L_bc (m)")
     ax.set_ylabel("cumulative volume passing (%)")
     ax.set_title("Fragment size grading" + ("" if len(data) > 1 else f": {data[0][0].label}"))
-    ax.legend(loc="lower right")
-    return save(fig, out_dir, "grading.png", written)
+    ax.legend(loc="lower right", fontsize=8)
+    return save(fig, out_dir, name, written)
 
 
 def load_frames(run, indices, magnify, notes):
@@ -719,3 +836,33 @@ def compare_damage(runs, out_dir, written, notes, args):
     return save(fig, out_dir, "damage_final_compare.png", written)
 
 
+
+
+def plot_ppv(records, out_dir, written, name="ppv.png"):
+    """Peak particle velocity at the monitors against scaled distance R / sqrt(Q), log-log, with
+    the fitted PPV = K SD^-beta of each run. records: [(label, points, fit, per_metre)]."""
+    records = [r for r in records if r[1]]
+    if not records:
+        return None
+    fig, ax = plt.subplots(figsize=(8.0, 5.5), constrained_layout=True)
+    colors = run_colors(len(records))
+    per_metre = all(r[3] for r in records)
+    for i, (label, pts, fit, _pm) in enumerate(records):
+        sd = np.array([p["scaled_distance"] for p in pts], float)
+        v = np.array([p["ppv_m_s"] for p in pts], float)
+        ax.loglog(sd, v, "o", color=colors[i], ms=6, label=f"{label}: monitors")
+        for p in pts:
+            ax.annotate(p["monitor"], (p["scaled_distance"], p["ppv_m_s"]), fontsize=7,
+                        textcoords="offset points", xytext=(4, 3), color=colors[i])
+        if fit:
+            xs = np.geomspace(sd.min() / 1.3, sd.max() * 1.3, 50)
+            ax.loglog(xs, fit["K"] * xs ** -fit["beta"], "-", color=colors[i], lw=1.3,
+                      label=f"{label}: PPV = {fit['K']:.3g} SD^-{fit['beta']:.2f} (R² {fit['r2']:.3f})")
+    unit = "m/(kg/m)^0.5, plane strain: Q per metre" if per_metre else "m/kg^0.5"
+    ax.set_xlabel(f"scaled distance SD = R / sqrt(Q) ({unit})")
+    ax.set_ylabel("peak particle velocity (m/s)")
+    ax.set_title("Peak particle velocity against scaled distance (R: distance to the nearest "
+                 "charge; Q: the largest charge per delay)", fontsize=10)
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    return save(fig, out_dir, name, written)

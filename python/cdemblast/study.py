@@ -521,7 +521,7 @@ def pick(values, larger_better, tol, names):
         if len(cands) == 1:
             decided = ci
             break
-    winner = cands[0] if cands else None
+    winner = cands[0] if len(cands) == 1 else None
     return winner, decided, trail
 
 
@@ -566,6 +566,7 @@ def recommend(measures, study):
            in_design("d40_m", lambda m: finite(m["grading"].get("d40_m"))), False)]
     for goal, crits in (("limits fly-rock", c1), ("breaks the rock best", c2)):
         winner, decided, trail = pick([c[1] for c in crits], [c[2] for c in crits], tol, names)
+        tied = trail[-1] if trail and winner is None else []
         goals.append({
             "goal": goal,
             "criteria": [{"criterion": c[0], "values": c[1], "larger_is_better": c[2]}
@@ -573,8 +574,10 @@ def recommend(measures, study):
             "rule": (f"the best variant on the first criterion; variants within {100 * tol:g} % "
                      "of the best go on to the next criterion"),
             "winner": winner,
+            "tied": tied,
             "decided_by": crits[decided][0] if decided is not None else
-            ("all criteria tied: the first variant left" if winner else "no data"),
+            (f"no clear winner: {', '.join(tied)} are within {100 * tol:g} % on every criterion"
+             if len(tied) > 1 else "no data"),
         })
     most = fly("max_launch_speed_m_s")
     known = {n: x for n, x in most.items() if x is not None}
@@ -843,6 +846,15 @@ def fmtv(v, f="{:.4g}", scale=1.0):
     return "–" if x is None else f.format(x * scale)
 
 
+def pick_label(goal, measures):
+    lab = {m["name"]: m["label"] for m in measures}
+    if goal["winner"]:
+        return lab[goal["winner"]]
+    if len(goal.get("tied", [])) > 1:
+        return "tie: " + ", ".join(lab[n] for n in goal["tied"])
+    return "–"
+
+
 def tables(measures, rec, study):
     """[(title, header, rows)] of the comparison."""
     labels = [m["label"] for m in measures]
@@ -854,8 +866,7 @@ def tables(measures, rec, study):
         for i, c in enumerate(g["criteria"]):
             rows.append([g["goal"] if i == 0 else "", c["criterion"]]
                         + [fmtv(c["values"].get(m["name"])) for m in measures]
-                        + ([next(m["label"] for m in measures if m["name"] == g["winner"])
-                            if g["winner"] else "–"] if i == 0 else [""]))
+                        + ([pick_label(g, measures)] if i == 0 else [""]))
         rows.append(["", "rule: " + g["rule"] + "; decided by: " + g["decided_by"]]
                     + [""] * len(measures) + [""])
     out.append(("Recommendation", ["goal", "criterion (in order)"] + labels + ["pick"], rows))
@@ -1037,8 +1048,7 @@ def compare(study, variants=None, pictures=True, log=print):
         f.write("\n")
     write_page(study, measures, rec, pics, analyses, notes, kuz)
     for g in rec["goals"]:
-        lab = next((m["label"] for m in measures if m["name"] == g["winner"]), "–")
-        log(f"study: {g['goal']}: {lab} ({g['decided_by']})")
+        log(f"study: {g['goal']}: {pick_label(g, measures)} ({g['decided_by']})")
     log(f"study: {len(pics)} pictures, index.html and study.json in {out_dir}")
     if failures.count:
         result["failures"] = failures.count

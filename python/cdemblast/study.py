@@ -93,7 +93,7 @@ def same_value(want, got, tol=1e-12):
     """Does the resolved value `got` hold the requested `want` (numbers to a relative
     tolerance, points padded with zeros, tables as subsets)?"""
     if isinstance(want, bool) or isinstance(got, bool):
-        return want == got
+        return isinstance(want, bool) and isinstance(got, bool) and want == got
     if isinstance(want, (int, float)) and isinstance(got, (int, float)):
         return abs(want - got) <= tol * max(1.0, abs(want), abs(got))
     if isinstance(want, dict):

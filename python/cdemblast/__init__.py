@@ -20,4 +20,15 @@ installation is needed. Needs numpy and matplotlib (Debian: /usr/bin/python3 wit
 python3-numpy and python3-matplotlib) and Python >= 3.11 (tomllib).
 """
 
+import sys
+
+try:  # the commands' one dependency check (numpy and matplotlib), with the fix in the message
+    import matplotlib
+    import numpy
+
+    del matplotlib, numpy
+except ImportError as _e:
+    sys.exit(f"cdemblast: {_e}; run it with a python3 that has numpy and matplotlib (Debian: "
+             "/usr/bin/python3 with python3-numpy and python3-matplotlib)")
+
 __all__ = ["vtu", "run", "geometry", "plots", "setup", "checks", "yardsticks", "report", "study"]

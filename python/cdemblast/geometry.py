@@ -104,17 +104,35 @@ class FieldFrame:
                 out.append((self.P[nodes][:, :, :2], ids))
         return out
 
-    def crack_segments_2d(self):
+    def _crack_cells(self, vtk_type):
+        """(reference, drawn positions, node ids of the crack cells of a type), or None."""
         c = self.cracks()
         if c is None:
             return None
-        grid, _, Pc = c
-        nodes = grid.cell_nodes(VTK_LINE)
-        if nodes.size == 0:
-            return None
-        return Pc[nodes][:, :, :2]
+        grid, Xc, Pc = c
+        nodes = grid.cell_nodes(vtk_type)
+        return None if nodes.size == 0 else (Xc, Pc, nodes)
+
+    def crack_segments_2d(self):
+        c = self._crack_cells(VTK_LINE)
+        return None if c is None else c[1][c[2]][:, :, :2]
 
     # ---- 3D ----
+    def _cut(self, X, P, elems, edges):
+        """Where the edges of the elements (node ids, (n, k)) cross the reference plane
+        X[h2] = section_at: (kept elements, crossing points (m, e, 2) in (h1, va) at the drawn
+        positions P, crossing mask (m, e)). X: reference positions deciding the cut."""
+        d = X[elems][:, :, self.h2] - self.section_at
+        keep = (d.min(1) < 0) & (d.max(1) >= 0)
+        elems, d = elems[keep], d[keep]
+        da, db = d[:, edges[:, 0]], d[:, edges[:, 1]]
+        cross = (da >= 0) != (db >= 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.where(cross, da / (da - db), 0.0)
+        Pa = P[elems[:, edges[:, 0]]][:, :, [self.h1, self.va]]
+        Pb = P[elems[:, edges[:, 1]]][:, :, [self.h1, self.va]]
+        return keep, Pa + s[:, :, None] * (Pb - Pa), cross
+
     def section(self):
         """Cut of the tets by the reference plane X[h2] = section_at:
         [(verts (n, k, 2) in (h1, va) coordinates, cell ids)]."""
@@ -122,17 +140,9 @@ class FieldFrame:
         ids = self.grid.cells_of_type(VTK_TETRA)
         if tets.size == 0:
             return []
-        d = self.X[tets][:, :, self.h2] - self.section_at
-        cut = (d.min(1) < 0) & (d.max(1) >= 0)
-        tets, ids, d = tets[cut], ids[cut], d[cut]
         edges = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
-        da, db = d[:, edges[:, 0]], d[:, edges[:, 1]]
-        cross = (da >= 0) != (db >= 0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = np.where(cross, da / (da - db), 0.0)
-        Pa = self.P[tets[:, edges[:, 0]]][:, :, [self.h1, self.va]]
-        Pb = self.P[tets[:, edges[:, 1]]][:, :, [self.h1, self.va]]
-        pts = Pa + s[:, :, None] * (Pb - Pa)
+        keep, pts, cross = self._cut(self.X, self.P, tets, edges)
+        ids = ids[keep]
         n = cross.sum(1)
         out = []
         for k in (3, 4):
@@ -149,29 +159,15 @@ class FieldFrame:
 
     def crack_section(self):
         """Crack traces in the section plane as segments (m, 2, 2) in (h1, va), or None."""
-        c = self.cracks()
+        c = self._crack_cells(VTK_TRIANGLE)
         if c is None:
             return None
-        grid, Xc, Pc = c
-        tri = grid.cell_nodes(VTK_TRIANGLE)
-        if tri.size == 0:
+        Xc, Pc, tri = c
+        _keep, pts, cross = self._cut(Xc, Pc, tri, np.array([(0, 1), (1, 2), (2, 0)]))
+        two = cross.sum(1) == 2
+        if not two.any():
             return None
-        d = Xc[tri][:, :, self.h2] - self.section_at
-        cut = (d.min(1) < 0) & (d.max(1) >= 0)
-        tri, d = tri[cut], d[cut]
-        edges = np.array([(0, 1), (1, 2), (2, 0)])
-        da, db = d[:, edges[:, 0]], d[:, edges[:, 1]]
-        cross = (da >= 0) != (db >= 0)
-        keep = cross.sum(1) == 2
-        if not keep.any():
-            return None
-        tri, da, db, cross = tri[keep], da[keep], db[keep], cross[keep]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = np.where(cross, da / (da - db), 0.0)
-        Pa = Pc[tri[:, edges[:, 0]]][:, :, [self.h1, self.va]]
-        Pb = Pc[tri[:, edges[:, 1]]][:, :, [self.h1, self.va]]
-        pts = Pa + s[:, :, None] * (Pb - Pa)
-        return pts[cross].reshape(-1, 2, 2)
+        return pts[two][cross[two]].reshape(-1, 2, 2)
 
     def top_faces(self):
         """Boundary faces looking up (out of the free surface), lowest first:
@@ -276,17 +272,13 @@ def block_measures(X, grid):
     return {"volume": vol, "centroid": cen, "l_max": lmax, "l_bc": size, "edge": edge}
 
 
-def _clip_triangles(tri, a, b):
-    """Parameters (t0, t1) of the part of the segment a + t (b - a), t in [0, 1], inside each
-    triangle (n, 3, 2) (Cyrus-Beck clipping); t1 < t0 when the segment misses it."""
-    n = len(tri)
+def _clip(planes, a, b, n):
+    """Cyrus-Beck clipping of the segment a + t (b - a), t in [0, 1], against n convex cells
+    given as their bounding planes [(inward normals (n, dim), points on the planes (n, dim))]:
+    (t0, t1) of the part inside each cell; t1 < t0 when the segment misses it."""
     d = b - a
     t0, t1 = np.zeros(n), np.ones(n)
-    sgn = np.where(polygon_area(tri) >= 0, 1.0, -1.0)
-    for i in range(3):
-        p, q = tri[:, i], tri[:, (i + 1) % 3]
-        e = q - p
-        nrm = sgn[:, None] * np.stack([-e[:, 1], e[:, 0]], 1)  # inward normal of edge p->q
+    for nrm, p in planes:
         num = np.einsum("ij,ij->i", nrm, a - p)
         den = nrm @ d
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -297,24 +289,26 @@ def _clip_triangles(tri, a, b):
     return t0, t1
 
 
+def _clip_triangles(tri, a, b):
+    """(t0, t1) of the segment a-b inside each triangle (n, 3, 2)."""
+    sgn = np.where(polygon_area(tri) >= 0, 1.0, -1.0)[:, None]
+    planes = []
+    for i in range(3):
+        p, q = tri[:, i], tri[:, (i + 1) % 3]
+        e = q - p
+        planes.append((sgn * np.stack([-e[:, 1], e[:, 0]], 1), p))  # inward normal of p->q
+    return _clip(planes, a, b, len(tri))
+
+
 def _clip_tets(tet, a, b):
-    """(t0, t1) of the segment a + t (b - a) inside each tetrahedron (n, 4, 3)."""
-    n = len(tet)
-    d = b - a
-    t0, t1 = np.zeros(n), np.ones(n)
+    """(t0, t1) of the segment a-b inside each tetrahedron (n, 4, 3)."""
+    planes = []
     for i, j, k, o in ((1, 2, 3, 0), (0, 3, 2, 1), (0, 1, 3, 2), (0, 2, 1, 3)):
         p, q, r = tet[:, i], tet[:, j], tet[:, k]
         nrm = np.cross(q - p, r - p)
         s = np.einsum("ij,ij->i", nrm, tet[:, o] - p)
-        nrm = np.where(s[:, None] < 0, -nrm, nrm)  # inward: towards the opposite vertex
-        num = np.einsum("ij,ij->i", nrm, a - p)
-        den = nrm @ d
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = -num / den
-        t0 = np.where(den > 0, np.maximum(t0, t), t0)
-        t1 = np.where(den < 0, np.minimum(t1, t), t1)
-        t1 = np.where((den == 0) & (num < 0), -1.0, t1)
-    return t0, t1
+        planes.append((np.where(s[:, None] < 0, -nrm, nrm), p))  # inward: to the opposite vertex
+    return _clip(planes, a, b, len(tet))
 
 
 def segment_length_per_block(X, grid, a, b, samples=1000):

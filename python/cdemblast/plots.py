@@ -517,12 +517,20 @@ def plot_monitors(runs, out_dir, written):
     return save(fig, out_dir, "monitors.png", written)
 
 
+def history_runs(runs, attr):
+    """(the runs that have the history `attr`, its longest time, the time axis factor and
+    unit); ([], None, None, None) when none has it."""
+    runs_with = [r for r in runs if getattr(r, attr) is not None]
+    if not runs_with:
+        return [], None, None, None
+    tmax = max(float(getattr(r, attr)["time"].max()) for r in runs_with)
+    return (runs_with, tmax) + time_scale(tmax)
+
+
 def plot_fracture(runs, out_dir, written):
-    runs_with = [r for r in runs if r.fracture is not None]
+    runs_with, tmax, tf, tu = history_runs(runs, "fracture")
     if not runs_with:
         return None
-    tmax = max(float(r.fracture["time"].max()) for r in runs_with)
-    tf, tu = time_scale(tmax)
     parts = [("degree_area", "total (area)"), ("tensile_area", "tensile"), ("shear_area", "shear"),
              ("degree_count", "count-based")]
     if len(runs_with) == 1:
@@ -612,11 +620,9 @@ def explosive_work_label(e, drop=0.01):
 
 
 def plot_energy(runs, out_dir, written):
-    runs_with = [r for r in runs if r.energy is not None]
+    runs_with, tmax, tf, tu = history_runs(runs, "energy")
     if not runs_with:
         return None
-    tmax = max(float(r.energy["time"].max()) for r in runs_with)
-    tf, tu = time_scale(tmax)
     if len(runs_with) == 1:
         r = runs_with[0]
         e = r.energy
@@ -861,8 +867,12 @@ def plot_ppv(records, out_dir, written, name="ppv.png"):
     unit = "m/(kg/m)^0.5, plane strain: Q per metre" if per_metre else "m/kg^0.5"
     ax.set_xlabel(f"scaled distance SD = R / sqrt(Q) ({unit})")
     ax.set_ylabel("peak particle velocity (m/s)")
-    ax.set_title("Peak particle velocity against scaled distance (R: distance to the nearest "
+    ax.set_title("Peak particle velocity against scaled distance\n(R: distance to the nearest "
                  "charge; Q: the largest charge per delay)", fontsize=10)
     ax.legend(loc="best", fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
+    plain = matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")
+    for axis in (ax.xaxis, ax.yaxis):  # plain numbers: no mathtext (slow to parse)
+        axis.set_major_formatter(plain)
+        axis.set_minor_formatter(plain)
     return save(fig, out_dir, name, written)

@@ -325,7 +325,8 @@ def plot_setup(setup, out_dir, written):
         return None
     run = setup.run
     names = setup.region_of_cell
-    regions = list(dict.fromkeys(names))
+    counts = {r: int(np.sum(names == r)) for r in dict.fromkeys(names)}
+    regions = sorted(counts, key=lambda r: -counts[r])  # the main region gets the first colour
     palette = ["#e0dcd3", "#c7e9c0", "#dadaeb", "#fff2ae", "#d9f0f3", "#f2e6f7"]
     rcol = {r: mcolors.to_rgba(palette[i % len(palette)]) for i, r in enumerate(regions)}
     for r in regions:

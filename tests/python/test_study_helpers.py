@@ -72,3 +72,34 @@ class Funnel(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class PerRegionAndWarnings(unittest.TestCase):
+    def test_fracture_per_region_columns_are_drawn_and_their_absence_noted(self):
+        import os
+        import tempfile
+        from types import SimpleNamespace
+        t = np.linspace(0, 1e-3, 11)
+        with_cols = {"time": t, "degree_area": t * 100, "degree_area_rock": t * 50,
+                     "degree_area_ring": t * 300}
+        plain = {"time": t, "degree_area": t * 100}
+        v1 = SimpleNamespace(label="A", run=SimpleNamespace(fracture=with_cols))
+        v2 = SimpleNamespace(label="B", run=SimpleNamespace(fracture=plain))
+        with tempfile.TemporaryDirectory() as d:
+            written, notes = [], []
+            self.assertEqual(st.plot_fracture_regions([v1, v2], d, written, notes),
+                             "fracture_regions.png")
+            self.assertTrue(os.path.getsize(os.path.join(d, "fracture_regions.png")) > 1000)
+            self.assertEqual(notes, [])
+            self.assertIsNone(st.plot_fracture_regions([v2], d, written, notes))
+            self.assertIn("per-region", notes[0])
+
+    def test_summary_warnings_are_merged(self):
+        from cdemblast import checks
+        ours = [checks.warning("energy_error", "ours")]
+        theirs = ["a plain string", {"code": "energy_error", "message": "theirs"},
+                  {"code": "charge_larger_than_block", "message": "per block", "value": 1.7}]
+        merged = checks.merge(ours, theirs)
+        self.assertEqual([w["message"] for w in merged], ["ours", "a plain string", "per block"])
+        self.assertEqual(merged[2]["value"], 1.7)
+        self.assertEqual(checks.merge([], None), [])

@@ -229,8 +229,9 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written, charge=None):
     views = [fr.view() for fr in frames]
     box = view_box([v.polys for v in views], frames[-1], views[-1].idx)
     aspect = box_aspect(box)
+    w, h = figsize_for(ncols, nrows, aspect, 3.6, False, True)
     fig, axes = plt.subplots(nrows, ncols, squeeze=False, constrained_layout=True,
-                             figsize=figsize_for(ncols, nrows, aspect, 3.6, False, True))
+                             figsize=(max(w, 7.5), h))
     if quantity == "damage":
         values = [cell_values(fr, "damage") for fr in frames]
         norm, cmap, extend = mcolors.Normalize(0, 1), DAMAGE_CMAP, "neither"
@@ -268,8 +269,8 @@ def plot_field_grid(run, frames, quantity, out_dir, name, written, charge=None):
             cb.set_label("damage" if nrows * aw_of(fig, ncols) / aspect < 4.5
                          else "damage (broken fraction of interface area)")
         else:
-            cb.set_label(f"von Mises (MPa, log scale), clipped at {top:.3g} "
-                         f"(99th percentile; max {vmax:.3g})")
+            cb.set_label(f"von Mises (MPa, log scale)\nclipped at {top:.3g} (99th pct.), "
+                         f"max {vmax:.3g}")
     if handle is not None:
         handle_ax.legend(handles=[handle], loc="lower left", fontsize=7, framealpha=0.85)
     where = f", {views[-1].where}" if views[-1].where else ""

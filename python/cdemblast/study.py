@@ -429,6 +429,12 @@ def measure_variant(v, study, notes):
         f = frs[0]
         last = f
         uz = vertical(f, run)
+        if st is not None and st.measures is not None and st.charge_cell.size == f.grid.ncells:
+            from .geometry import cell_node_lists
+            rock_node = np.ones(uz.size, bool)  # the charge's own blocks are not fly-rock
+            for ids, nodes in cell_node_lists(f.grid):
+                rock_node[nodes[st.charge_cell[ids]].ravel()] = False
+            uz = uz[rock_node]
         if uz.size and (fly["max_vertical_displacement_m"] is None
                         or uz.max() > fly["max_vertical_displacement_m"]):
             fly["max_vertical_displacement_m"] = float(uz.max())

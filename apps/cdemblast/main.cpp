@@ -1,6 +1,8 @@
 // cdemblast: the command-line program.
 //   cdemblast run CASE [--out DIR] [--threads N] [--set key=value]...
 //   cdemblast check CASE [--set key=value]...
+//   cdemblast report RUN... [--out DIR]
+//   cdemblast study FILE [--out DIR] [--threads N] [--no-run]
 //   cdemblast --version
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -85,20 +87,17 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   return 0;
 }
 
-// The report is drawn by scripts/cdem_report.py (matplotlib); this runs it with Debian's python.
-int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
+// The report and the studies are Python (python/cdemblast, matplotlib): run one of the thin
+// commands of scripts/ with Debian's python (or $CDEM_PYTHON), the script taken from the source
+// tree the program was built from (or the environment variable `script_env`).
+int run_python(const char* script_env, const char* script_name, const std::vector<std::string>& args) {
   namespace fs = std::filesystem;
-  const char* env = std::getenv("CDEM_REPORT_SCRIPT");
-  const std::string script = env ? env : (fs::path(CDEM_SOURCE_DIR) / "scripts" / "cdem_report.py").string();
+  const char* env = std::getenv(script_env);
+  const std::string script = env ? env : (fs::path(CDEM_SOURCE_DIR) / "scripts" / script_name).string();
   if (!fs::exists(script)) {
-    fmt::print(stderr, "error: the report script '{}' is missing\n", script);
+    fmt::print(stderr, "error: the script '{}' is missing\n", script);
     return 1;
   }
-  for (const auto& r : runs)
-    if (!fs::exists(fs::path(r) / "summary.json")) {
-      fmt::print(stderr, "error: '{}' is not a finished run directory (no summary.json)\n", r);
-      return 2;
-    }
   const char* py_env = std::getenv("CDEM_PYTHON");
   const std::string py = py_env ? py_env : (fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
   auto quote = [](const std::string& s) {
@@ -107,10 +106,34 @@ int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
     return o + "'";
   };
   std::string cmd = quote(py) + " " + quote(script);
-  for (const auto& r : runs) cmd += " " + quote(r);
-  if (!out.empty()) cmd += " --out " + quote(out);
+  for (const auto& a : args) cmd += " " + quote(a);
   const int rc = std::system(cmd.c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : 1;
+}
+
+int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
+  for (const auto& r : runs)
+    if (!std::filesystem::exists(std::filesystem::path(r) / "summary.json")) {
+      fmt::print(stderr, "error: '{}' is not a finished run directory (no summary.json)\n", r);
+      return 2;
+    }
+  std::vector<std::string> args = runs;
+  if (!out.empty()) args.insert(args.end(), {"--out", out});
+  return run_python("CDEM_REPORT_SCRIPT", "cdem_report.py", args);
+}
+
+// A study (docs/study.md): the variants are run by this very program (--bin).
+int cmd_study(const std::string& file, const std::string& out, int threads, bool no_run,
+              const char* argv0) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) self = fs::absolute(argv0);
+  std::vector<std::string> args = {file, "--bin", self.string()};
+  if (!out.empty()) args.insert(args.end(), {"--out", out});
+  if (threads > 0) args.insert(args.end(), {"--threads", std::to_string(threads)});
+  if (no_run) args.push_back("--no-run");
+  return run_python("CDEM_STUDY_SCRIPT", "cdem_study.py", args);
 }
 
 }  // namespace
@@ -143,6 +166,16 @@ int main(int argc, char** argv) {
   report->add_option("runs", report_runs, "Run directories (several: overlaid for comparison)")->required();
   report->add_option("--out,-o", report_out, "Output directory (default: RUN/report)");
 
+  std::string study_file, study_out;
+  int study_threads = 0;
+  bool study_no_run = false;
+  auto* study = app.add_subcommand("study", "Run the variants of a study file and compare them (docs/study.md)");
+  study->add_option("file", study_file, "Study file (TOML)")->required();
+  study->add_option("--out,-o", study_out, "Study directory (default: the file's [study] out)");
+  study->add_option("--threads,-t", study_threads, "OpenMP threads of every run")
+      ->check(CLI::Range(0, 4096).description("an integer >= 0"));
+  study->add_flag("--no-run", study_no_run, "Compare the runs already in the directory");
+
   cdem::BenchOptions bench_opt;
   auto* bench = app.add_subcommand("bench", "Time the step on a 3D tet model: throughput, kernel split, memory, scaling");
   bench->add_option("--blocks", bench_opt.blocks, "Approximate number of blocks (default 30000)")
@@ -165,6 +198,7 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(case_path, sets);
     if (*report) return cmd_report(report_runs, report_out);
+    if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, argv[0]);
     if (*bench) return cdem::run_bench(bench_opt);
     const cdem::Case c = cdem::load_case(case_path, sets);
     if (out_dir.empty()) out_dir = (std::filesystem::path("runs") / std::filesystem::path(case_path).stem()).string();

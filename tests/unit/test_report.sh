@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The report tool (scripts/cdem_report.py): a quick 2D run (triangles) and its report, then
-# the overlay of a quad run with a copy of the first run given grading data. Checks that
-# every expected picture exists, is a real PNG of the expected size and is not blank, and
-# that index.html and summary.md show every picture and reference only files that exist.
+# the overlay of a quad run with a copy of the first run given grading data, and a charged
+# run (the SPEC 5.1 bar case, coarse) with a Kuz-Ram design. Checks that every expected
+# picture exists, is a real PNG of the expected size and is not blank, that index.html and
+# summary.md show every picture and reference only files that exist, the set-up tables, the
+# warnings box, 2D units, report.json (warnings, charge, PPV fit, Kuz-Ram).
 #
 #   bash test_report.sh <cdemblast-binary> <repo-root>
 set -euo pipefail
@@ -44,7 +46,24 @@ s["funnel_depth_m"] = 0.25
 json.dump(s, open(p, "w"))
 EOF
 
+# A charged run (SPEC 5.1 bar case, coarse and short): charges, powder factor, PPV, warnings,
+# and the Kuz-Ram curves of a design file.
+"$BIN" run "$ROOT/examples/single_hole_2d/bar.toml" --out "$TMP/bar" -q \
+  --set mesh.generate.element_size=0.2 --set simulation.end_time=1e-3 \
+  --set 'simulation.output_times=[2.5e-4,1e-3]' >"$TMP/run_bar.log" 2>&1 ||
+  { cat "$TMP/run_bar.log"; fail "the charged run failed"; }
+cat >"$TMP/design.toml" <<'EOT'
+[design]
+rock_factor = 7.0
+burden = 1.0
+spacing = 1.2
+bench_height = 1.0
+charge_per_hole = 5.0
+EOT
+
 "$PY" "$REPORT" "$TMP/tri" >"$TMP/rep1.log" 2>&1 || { cat "$TMP/rep1.log"; fail "report of one run failed"; }
+"$PY" "$REPORT" "$TMP/bar" --design "$TMP/design.toml" >"$TMP/rep4.log" 2>&1 ||
+  { cat "$TMP/rep4.log"; fail "report of the charged run failed"; }
 "$PY" "$REPORT" "$TMP/graded" "$TMP/quad" --out "$TMP/cmp" >"$TMP/rep2.log" 2>&1 ||
   { cat "$TMP/rep2.log"; fail "overlay report of two runs failed"; }
 
@@ -117,7 +136,7 @@ def check_links(out_dir):
             errors.append(f"{out_dir}/summary.md does not show {png}")
     return text, md
 
-fixed = {"monitors.png": (1350, 1425), "fracture.png": (1275, 750), "energy.png": (1350, 1200)}
+fixed = {"monitors.png": (1350, 1425), "fracture.png": (1275, 750), "energy.png": (1650, 1200)}
 
 def has_grading(run):
     """Did the run write grading data (a grading.csv with a data row)?"""
@@ -131,8 +150,8 @@ def has_fragment_ids(run):
 # One run. Grading and fragment pictures are expected when the run wrote their data.
 tri = os.path.join(tmp, "tri")
 one = os.path.join(tri, "report")
-pngs = ["monitors.png", "fracture.png", "energy.png", "damage_maps.png", "von_mises_maps.png",
-        "damage_final.png"]
+pngs = ["setup.png", "monitors.png", "fracture.png", "energy.png", "damage_maps.png",
+        "von_mises_maps.png", "damage_final.png"]
 pngs += ["fragments_final.png"] if has_fragment_ids(tri) else []
 for png in pngs:
     check_png(os.path.join(one, png), fixed.get(png), 0.01 if png in fixed else 0.3)
@@ -145,9 +164,41 @@ if res:
     html, md = res
     if not has_grading(tri) and "grading.png skipped" not in md:
         errors.append(f"{one}/summary.md: no note that grading.png was skipped")
-    for needle in ("fracture degree (area)", "plate_with_hole_2d", "peak von Mises"):
+    for needle in ("fracture degree (area)", "plate_with_hole_2d", "peak von Mises", "Set-up",
+                   "Materials", "Interface laws", "n/a (2D)", "J/m", "m³/m"):
         if needle not in md or needle not in html:
             errors.append(f"{one}: '{needle}' missing from summary.md or index.html")
+    if 'id="warnings"' not in html or html.index('id="warnings"') > html.index("Key numbers"):
+        errors.append(f"{one}/index.html: no warnings box above the key numbers")
+
+# report.json: every number, and the warnings list (merged with summary.json's).
+import json
+rj = json.load(open(os.path.join(one, "report.json")))
+if not isinstance(rj.get("warnings"), list) or rj["runs"][0]["setup"]["dimension"] != 2:
+    errors.append(f"{one}/report.json: no warnings list or set-up")
+
+# The charged run: charge and powder factor, warnings that fire, PPV fit, Kuz-Ram.
+bar = os.path.join(tmp, "bar", "report")
+for png in ("setup.png", "ppv.png"):
+    check_png(os.path.join(bar, png), None, 0.01)
+res = check_links(bar)
+rj = json.load(open(os.path.join(bar, "report.json")))
+codes = {w["code"] for w in rj["warnings"]}
+for code in ("powder_factor", "charge_larger_than_block"):
+    if code not in codes:
+        errors.append(f"{bar}/report.json: warning '{code}' did not fire ({sorted(codes)})")
+st = rj["runs"][0]["setup"]
+if abs(st["charge_mass_kg"] - 1150 * 0.1 * 0.5) > 1e-6 or not st["per_metre"]:
+    errors.append(f"{bar}/report.json: charge {st['charge_mass_kg']} kg/m, expected 57.5 kg/m")
+if not (rj["runs"][0]["ppv"]["fit"] or {}).get("beta"):
+    errors.append(f"{bar}/report.json: no PPV fit")
+if not (rj.get("kuz_ram") or {}).get("x50_m"):
+    errors.append(f"{bar}/report.json: no Kuz-Ram prediction of the design")
+if res:
+    for needle in ("57.5", "kg/m", "powder factor", "Warnings", "Peak particle velocity",
+                   "Kuz-Ram"):
+        if needle not in res[0]:
+            errors.append(f"{bar}/index.html: '{needle}' missing")
 
 # Overlay of two runs, one with grading data (--out).
 cmp_dir = os.path.join(tmp, "cmp")

@@ -219,6 +219,78 @@ TEST_F(VtuTest, LayoutFollowsVtkXmlAppendedRaw) {
   }
 }
 
+// ParaView-facing metadata: tensor component names, the TimeValue field data, and an
+// integer array's type kept on a mesh without cells (the empty-grid placeholder).
+TEST_F(VtuTest, TensorsAreNamedAndTheTimeIsInTheFile) {
+  VtuMesh m = mixed_mesh();
+  m.time = 2.5e-3 + 1e-19;
+  m.cell_data[0].component_names = {};  // 1 component: no names
+  for (bool compress : {false, true}) {
+    const std::string path = file("named.vtu");
+    write_vtu(path, m, compress);
+    const std::string text = slurp(path);
+    const std::string head = text.substr(0, data_start(text));
+    EXPECT_NE(head.find(R"(Name="stress" NumberOfComponents="6" format="appended")"),
+              std::string::npos);
+    EXPECT_NE(head.find(R"(ComponentName0="xx" ComponentName1="yy" ComponentName2="zz" )"
+                        R"(ComponentName3="xy" ComponentName4="yz" ComponentName5="xz"/>)"),
+              std::string::npos);
+    EXPECT_EQ(head.find(R"(Name="displacement" NumberOfComponents="3" format="appended" )"
+                        R"(offset="0" ComponentName)"),
+              std::string::npos);
+    const std::size_t fd = head.find("<FieldData>");
+    ASSERT_NE(fd, std::string::npos);
+    EXPECT_LT(head.find("<UnstructuredGrid>"), fd);
+    EXPECT_LT(fd, head.find("<Piece"));
+    EXPECT_NE(head.find(R"(<DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" )"
+                        R"(format="appended")"),
+              std::string::npos);
+    const VtuData d = read_vtu(path);
+    expect_same(m, d);
+    EXPECT_EQ(bits(d.time), bits(m.time));
+    EXPECT_EQ(d.cell_data.at("stress").component_names,
+              (std::vector<std::string>{"xx", "yy", "zz", "xy", "yz", "xz"}));
+    EXPECT_TRUE(d.cell_data.at("velocity").component_names.empty());
+    EXPECT_EQ(d.cell_data.at("damage_mode").type, VtuType::kInt32);
+    EXPECT_EQ(d.cell_data.at("stress").type, VtuType::kFloat64);
+  }
+  // Without a time: no field data.
+  VtuMesh untimed = mixed_mesh();
+  write_vtu(file("untimed.vtu"), untimed);
+  EXPECT_EQ(slurp(file("untimed.vtu")).find("FieldData"), std::string::npos);
+  EXPECT_TRUE(std::isnan(read_vtu(file("untimed.vtu")).time));
+}
+
+TEST_F(VtuTest, EmptyMeshKeepsArrayTypesAndReadsAsEmpty) {
+  VtuMesh m;
+  m.time = 0.0;
+  m.cell_data.push_back({"mode", 1, {}, {}, VtuType::kInt32});
+  m.cell_data.push_back({"broken_fraction", 1, {}, {}});
+  m.cell_data.push_back({"stress", 6, {}, {}});
+  for (bool compress : {false, true}) {
+    const std::string path = file("empty_typed.vtu");
+    write_vtu(path, m, compress);
+    const std::string text = slurp(path);
+    const std::string head = text.substr(0, data_start(text));
+    // One placeholder cell (a polygon of no nodes, see vtu.hpp) and no point.
+    EXPECT_NE(head.find(R"(<Piece NumberOfPoints="0" NumberOfCells="1">)"), std::string::npos);
+    EXPECT_NE(head.find(R"(<DataArray type="Int32" Name="mode")"), std::string::npos);
+    EXPECT_NE(head.find(R"(<DataArray type="Float64" Name="broken_fraction")"),
+              std::string::npos);
+    const VtuData d = read_vtu(path);
+    EXPECT_EQ(d.num_points, 0);
+    EXPECT_EQ(d.num_cells, 0);
+    EXPECT_TRUE(d.types.empty());
+    EXPECT_TRUE(d.offsets.empty());
+    EXPECT_EQ(d.cell_data.at("mode").type, VtuType::kInt32);
+    EXPECT_TRUE(d.cell_data.at("mode").i32.empty());
+    EXPECT_EQ(d.cell_data.at("broken_fraction").type, VtuType::kFloat64);
+    EXPECT_TRUE(d.cell_data.at("stress").f64.empty());
+    EXPECT_EQ(d.cell_data.at("stress").components, 6);
+    EXPECT_EQ(bits(d.time), bits(0.0));
+  }
+}
+
 TEST_F(VtuTest, PvdRoundTripsAndStaysValidAfterEachStep) {
   const std::string pvd = file("fields.pvd");
   const std::vector<std::pair<double, std::string>> steps = {
@@ -366,6 +438,15 @@ TEST_F(VtuTest, InconsistentMeshesAreRefusedAndLeaveNoFile) {
   m = mixed_mesh();
   m.types[0] = kVtkQuad;
   refused(m, "cell 0: VTK type 9 needs 4 nodes, got 3");
+  m = mixed_mesh();
+  m.cell_data[0].type = VtuType::kInt32;
+  refused(m, "declared Int32, given doubles");
+  m = mixed_mesh();
+  m.cell_data[1].type = VtuType::kFloat64;
+  refused(m, "declared Float64, given integers");
+  m = mixed_mesh();
+  m.cell_data[2].component_names = {"a", "b"};
+  refused(m, "2 component names for 6 components");
 }
 
 TEST_F(VtuTest, UnwritablePathsThrowNamingThePath) {

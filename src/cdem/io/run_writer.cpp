@@ -79,6 +79,7 @@ void RunWriter::write_fields(const Model& m, double t) {
   const std::string name = fmt::format("{:04d}", frame_++);
   // ---- blocks, each with its own nodes (cracks open as gaps) ----
   VtuMesh vm;
+  vm.time = t;
   vm.points = m.x;
   const std::size_t nb = m.n_blocks();
   vm.types.reserve(nb);
@@ -99,7 +100,8 @@ void RunWriter::write_fields(const Model& m, double t) {
   std::vector<std::int32_t> mode;
   block_damage(m, damage, mode);
   VtuArray stress{"stress", 6, {}, {}}, pres{"pressure", 1, {}, {}}, vmis{"von_mises", 1, {}, {}},
-      dmg{"damage", 1, damage, {}}, dmode{"damage_mode", 1, {}, mode}, reg{"region", 1, {}, {}},
+      dmg{"damage", 1, damage, {}}, dmode{"damage_mode", 1, {}, mode, VtuType::kInt32},
+      reg{"region", 1, {}, {}, VtuType::kInt32},
       jr{"volume_ratio", 1, m.vol_ratio, {}};
   for (std::size_t b = 0; b < nb; ++b) {
     const Sym6& s = m.stress[b];
@@ -109,7 +111,7 @@ void RunWriter::write_fields(const Model& m, double t) {
     reg.i32.push_back(m.block_region[b]);
   }
   const FragmentResult frag = model_fragments(m);
-  VtuArray fid{"fragment_id", 1, {}, frag.fragment_of_block};
+  VtuArray fid{"fragment_id", 1, {}, frag.fragment_of_block, VtuType::kInt32};
   vm.cell_data = {std::move(stress), std::move(pres), std::move(vmis), std::move(dmg),
                   std::move(dmode), std::move(reg), std::move(jr), std::move(fid)};
   {
@@ -131,7 +133,8 @@ void RunWriter::write_fields(const Model& m, double t) {
 
   // ---- cracks: interfaces with at least one broken (rock) spring point ----
   VtuMesh cm;
-  VtuArray cmode{"mode", 1, {}, {}}, cfrac{"broken_fraction", 1, {}, {}}, ctime{"break_time", 1, {}, {}};
+  cm.time = t;
+  VtuArray cmode{"mode", 1, {}, {}, VtuType::kInt32}, cfrac{"broken_fraction", 1, {}, {}}, ctime{"break_time", 1, {}, {}};
   const int np = m.springs_per_iface;
   for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
     int broken = 0, shear = 0;

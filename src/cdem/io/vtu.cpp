@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <set>
 #include <stdexcept>
 #include <type_traits>
@@ -150,6 +151,15 @@ void check_arrays(const std::string& path, const std::vector<VtuArray>& arrays, 
     if (!names.insert(a.name).second) throw bad("the name is used twice");
     if (a.components < 1) throw bad(fmt::format("{} components (at least 1)", a.components));
     if (!a.f64.empty() && !a.i32.empty()) throw bad("both f64 and i32 values are set");
+    if (a.type == VtuType::kInt32 && !a.f64.empty()) throw bad("declared Int32, given doubles");
+    if (a.type == VtuType::kFloat64 && !a.i32.empty()) throw bad("declared Float64, given integers");
+    if (!a.component_names.empty() &&
+        a.component_names.size() != static_cast<std::size_t>(a.components))
+      throw bad(fmt::format("{} component names for {} components", a.component_names.size(),
+                            a.components));
+    for (const std::string& c : a.component_names)
+      if (c.empty() || has_control_char(c))
+        throw bad("component names must be non-empty and without control characters");
     const std::size_t size = a.i32.empty() ? a.f64.size() : a.i32.size();
     const std::size_t expected = n * static_cast<std::size_t>(a.components);
     if (size != expected)
@@ -189,10 +199,24 @@ void check_mesh(const std::string& path, const VtuMesh& mesh) {
   check_arrays(path, mesh.cell_data, ncells, "cell");
 }
 
+// Names of the components written for an array (see vtu.hpp): the given ones, else
+// xx, yy, zz, xy, yz, xz for the 6-component symmetric tensors, else none.
+std::vector<std::string> component_names(const VtuArray& a) {
+  if (!a.component_names.empty()) return a.component_names;
+  if (a.components == 6) return {"xx", "yy", "zz", "xy", "yz", "xz"};
+  return {};
+}
+
+bool is_int32(const VtuArray& a) {
+  return a.type == VtuType::kInt32 || (a.type == VtuType::kAuto && !a.i32.empty());
+}
+
 // One array of the appended section: its XML description and its encoded bytes.
 struct Appended {
   std::string xml_type, name;
   int components = 1;
+  std::vector<std::string> component_names;
+  std::string extra;  // further attributes (NumberOfTuples of field data)
   const char* raw = nullptr;  // the caller's values, raw_size bytes
   std::uint64_t raw_size = 0;
   std::vector<std::uint64_t> header;               // compressed: [n, block, last, sizes...]
@@ -219,8 +243,27 @@ Appended appended(std::string xml_type, std::string name, int components,
 }
 
 Appended appended_data(const VtuArray& array) {
-  if (!array.i32.empty()) return appended("Int32", array.name, array.components, array.i32);
-  return appended("Float64", array.name, array.components, array.f64);
+  Appended a = is_int32(array) ? appended("Int32", array.name, array.components, array.i32)
+                               : appended("Float64", array.name, array.components, array.f64);
+  a.component_names = component_names(array);
+  return a;
+}
+
+// The arrays of a mesh without cells, padded to the placeholder cell's one tuple (NaN for
+// Float64, 0 for Int32; see vtu.hpp).
+std::vector<VtuArray> placeholder_cell_data(const std::vector<VtuArray>& arrays) {
+  std::vector<VtuArray> out = arrays;
+  for (VtuArray& a : out) {
+    const auto n = static_cast<std::size_t>(a.components);
+    if (is_int32(a)) {
+      a.type = VtuType::kInt32;
+      a.i32.assign(n, 0);
+    } else {
+      a.type = VtuType::kFloat64;
+      a.f64.assign(n, std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  return out;
 }
 
 // Compresses every array into 1 MiB zlib blocks, all blocks in parallel.
@@ -269,7 +312,11 @@ std::string data_array_xml(const Appended& a, std::uint64_t offset, const char* 
   std::string xml =
       fmt::format(R"({}<DataArray type="{}" Name="{}")", indent, a.xml_type, xml_escape(a.name));
   if (a.components != 1) xml += fmt::format(R"( NumberOfComponents="{}")", a.components);
-  xml += fmt::format(R"( format="appended" offset="{}"/>)", offset);
+  xml += a.extra;
+  xml += fmt::format(R"( format="appended" offset="{}")", offset);
+  for (std::size_t c = 0; c < a.component_names.size(); ++c)
+    xml += fmt::format(R"( ComponentName{}="{}")", c, xml_escape(a.component_names[c]));
+  xml += "/>";
   xml += '\n';
   return xml;
 }
@@ -279,10 +326,22 @@ std::string data_array_xml(const Appended& a, std::uint64_t offset, const char* 
 void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
   check_mesh(path, mesh);
 
-  // The appended arrays in file order: point data, cell data, points, cells.
+  // A mesh without cells gets the placeholder cell (see vtu.hpp): a polygon of no nodes.
+  const bool placeholder = mesh.types.empty();
+  static const std::vector<std::int64_t> kPlaceholderOffsets = {0};
+  static const std::vector<std::uint8_t> kPlaceholderTypes = {7};  // VTK_POLYGON
+  const std::vector<VtuArray> padded =
+      placeholder ? placeholder_cell_data(mesh.cell_data) : std::vector<VtuArray>{};
+  const std::vector<VtuArray>& cell_data = placeholder ? padded : mesh.cell_data;
+  const std::vector<std::int64_t>& cell_offsets = placeholder ? kPlaceholderOffsets : mesh.offsets;
+  const std::vector<std::uint8_t>& cell_types = placeholder ? kPlaceholderTypes : mesh.types;
+  const std::vector<double> time_value = {mesh.time};
+  const bool has_time = std::isfinite(mesh.time);
+
+  // The appended arrays in file order: point data, cell data, points, cells, field data.
   std::vector<Appended> arrays;
   for (const VtuArray& a : mesh.point_data) arrays.push_back(appended_data(a));
-  for (const VtuArray& a : mesh.cell_data) arrays.push_back(appended_data(a));
+  for (const VtuArray& a : cell_data) arrays.push_back(appended_data(a));
   Appended points;
   points.xml_type = "Float64";
   points.name = "Points";
@@ -291,8 +350,12 @@ void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
   points.raw_size = mesh.points.size() * sizeof(Vec3);
   arrays.push_back(points);
   arrays.push_back(appended("Int64", "connectivity", 1, mesh.connectivity));
-  arrays.push_back(appended("Int64", "offsets", 1, mesh.offsets));
-  arrays.push_back(appended("UInt8", "types", 1, mesh.types));
+  arrays.push_back(appended("Int64", "offsets", 1, cell_offsets));
+  arrays.push_back(appended("UInt8", "types", 1, cell_types));
+  if (has_time) {
+    arrays.push_back(appended("Float64", "TimeValue", 1, time_value));
+    arrays.back().extra = R"( NumberOfTuples="1")";
+  }
   if (compress) compress_all(path, arrays);
 
   std::vector<std::uint64_t> offsets(arrays.size());
@@ -308,10 +371,16 @@ void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
          R"( header_type="UInt64")";
   if (compress) xml += R"( compressor="vtkZLibDataCompressor")";
   xml += ">\n  <UnstructuredGrid>\n";
-  xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.points.size(),
-                     mesh.types.size());
-  const std::size_t npd = mesh.point_data.size(), ncd = mesh.cell_data.size();
   const char* ind = "        ";
+  const std::size_t ncells_array = arrays.size() - (has_time ? 1 : 0);  // end of the cell arrays
+  if (has_time) {
+    xml += "    <FieldData>\n";
+    xml += data_array_xml(arrays.back(), offsets.back(), "      ");
+    xml += "    </FieldData>\n";
+  }
+  xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.points.size(),
+                     cell_types.size());
+  const std::size_t npd = mesh.point_data.size(), ncd = cell_data.size();
   xml += "      <PointData>\n";
   for (std::size_t i = 0; i < npd; ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
   xml += "      </PointData>\n      <CellData>\n";
@@ -320,7 +389,7 @@ void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
   std::size_t i = npd + ncd;
   xml += data_array_xml(arrays[i], offsets[i], ind);
   xml += "      </Points>\n      <Cells>\n";
-  for (++i; i < arrays.size(); ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
+  for (++i; i < ncells_array; ++i) xml += data_array_xml(arrays[i], offsets[i], ind);
   xml += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
   xml += "  <AppendedData encoding=\"raw\">\n   _";
 

@@ -10,14 +10,29 @@
 //    compressed in parallel with OpenMP): UInt64 header [nblocks, 1048576, size of the last
 //    block if partial else 0, compressed size of each block...], then the zlib streams.
 //  - Types: Float64 for doubles and the points, Int32 for integer fields, Int64 for cell
-//    connectivity and offsets (end offset of each cell), UInt8 for VTK cell types.
-//    6-component arrays are read by ParaView as symmetric tensors XX, YY, ZZ, XY, YZ, XZ.
+//    connectivity and offsets (end offset of each cell), UInt8 for VTK cell types. An array
+//    keeps its declared type (VtuArray::type) even when it holds no value, so every file of a
+//    series declares the same type for the same array (an empty crack file included).
+//  - Component names: 6-component arrays are the project's symmetric tensors (Sym6) and get
+//    ComponentName0..5 = xx, yy, zz, xy, yz, xz, so ParaView shows them by name, not 0..5
+//    (VtuArray::component_names overrides this, for any number of components).
+//  - Time: when VtuMesh::time is finite, the grid carries it as field data `TimeValue`
+//    (Float64, one tuple; VTK's and ParaView's convention), so one file knows its time
+//    without the PVD.
+//  - Empty grids: a mesh without cells is written with one placeholder cell, a VTK_POLYGON
+//    with no nodes, and its cell arrays with one tuple (NaN for Float64, 0 for Int32).
+//    VTK's XML reader requires a <Cells> element; meshio (5.x to 7.0) fails on a <Cells> with
+//    no cell (IndexError, meshio issue #1412) and on a piece without one; with the
+//    placeholder both read the file, and the placeholder draws nothing in ParaView. The
+//    project's readers (vtu_reader.hpp, python/cdemblast/vtu.py) recognise it (0-node polygon
+//    as the only cell) and return 0 cells.
 //  - Files are written to `<path>.tmp` and renamed onto `<path>` (atomic on POSIX), so a
 //    reader never sees half a file. No fsync: this guards against a crashed run, not power loss.
 //  - A series is a PVD collection (<DataSet timestep part="0" file>, times as %.17g, so they
 //    read back bit-exact), rewritten (also atomically) after every step.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +41,11 @@
 
 namespace cdem {
 
+// The stored type of an array. kAuto: Int32 when i32 holds values, else Float64; give the
+// type of an array that may be empty (an integer field on an empty mesh), so that it is
+// declared with the same type in every file of a series.
+enum class VtuType : std::uint8_t { kAuto, kFloat64, kInt32 };
+
 // One named point or cell array. Exactly one of f64 / i32 holds the values (both may be empty
 // for an empty mesh), stored tuple by tuple: size = (number of points or cells) * components.
 struct VtuArray {
@@ -33,6 +53,10 @@ struct VtuArray {
   int components = 1;
   std::vector<double> f64;
   std::vector<std::int32_t> i32;
+  VtuType type = VtuType::kAuto;
+  // Names of the components (written as ComponentName0, 1, ...); empty: xx, yy, zz, xy, yz, xz
+  // for 6 components, none otherwise. Otherwise exactly `components` names.
+  std::vector<std::string> component_names = {};
 };
 
 // VTK cell type codes used by the project (any other VTK code is written unchecked).
@@ -53,11 +77,14 @@ struct VtuMesh {
   std::vector<std::int64_t> offsets;       // end offset of each cell in connectivity (VTK)
   std::vector<std::uint8_t> types;         // VTK cell type of each cell (VtkCellType)
   std::vector<VtuArray> point_data, cell_data;
+  // Simulated time of the grid (s), written as the field data TimeValue when finite.
+  double time = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Writes `mesh` to `path` (see the format above); compress selects the zlib block layout.
 // Throws std::invalid_argument when the mesh is inconsistent (sizes, node ids, node counts of
-// known cell types, empty or duplicate array names), and std::runtime_error naming the path
+// known cell types, empty or duplicate array names, an array whose values are not of its
+// declared type, a wrong number of component names), and std::runtime_error naming the path
 // when the file cannot be written; in both cases `path` is left untouched.
 void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress = true);
 

@@ -396,6 +396,7 @@ class Appended {
 struct RawArray {
   std::string name, type;
   int components = 1;
+  std::vector<std::string> component_names;
   std::vector<unsigned char> bytes;
   std::size_t count() const { return bytes.size() / type_size(type); }
 };
@@ -421,6 +422,13 @@ class ArrayReader {
       if (n < 1 || n > 1024) fail(where_, fmt::format("{}: {} components", label, n));
       a.components = static_cast<int>(n);
     }
+    for (int c = 0; c < a.components; ++c) {
+      const std::string* cn = e.attribute(fmt::format("ComponentName{}", c));
+      if (!cn) break;
+      a.component_names.push_back(*cn);
+    }
+    if (a.component_names.size() != static_cast<std::size_t>(a.components))
+      a.component_names.clear();
     if (want_components > 0 && a.components != want_components)
       fail(where_,
            fmt::format("{}: {} components, expected {}", label, a.components, want_components));
@@ -491,20 +499,29 @@ std::vector<Out> convert(const std::string& where, const RawArray& a) {
   return out;
 }
 
+// Reads the arrays of <PointData>, <CellData> (tuples given) or <FieldData> (tuples < 0: each
+// array's NumberOfTuples).
 void read_attributes(const std::string& where, ArrayReader& reader, const XmlElement* parent,
-                     const char* context, std::uint64_t tuples,
+                     const char* context, std::int64_t tuples,
                      std::map<std::string, VtuArray>& out) {
   if (!parent) return;
   for (const XmlElement& e : parent->children) {
-    RawArray raw = reader.read(e, context, tuples);
+    std::int64_t n = tuples;
+    if (n < 0)
+      n = parse_count(where, e, "NumberOfTuples", required(where, e, "NumberOfTuples"));
+    RawArray raw = reader.read(e, context, static_cast<std::uint64_t>(n));
     if (raw.name.empty()) fail(where, fmt::format("a {} array has no Name", context));
     VtuArray a;
     a.name = raw.name;
     a.components = raw.components;
-    if (is_float(raw.type))
+    a.component_names = raw.component_names;
+    if (is_float(raw.type)) {
+      a.type = VtuType::kFloat64;
       a.f64 = convert<double>(where, raw);
-    else
+    } else {
+      a.type = VtuType::kInt32;
       a.i32 = convert<std::int32_t>(where, raw);
+    }
     if (!out.emplace(a.name, std::move(a)).second)
       fail(where, fmt::format("two {} arrays named '{}'", context, raw.name));
   }
@@ -560,9 +577,14 @@ VtuData read_vtu(const std::string& path) {
   const auto npoints = static_cast<std::uint64_t>(data.num_points);
   const auto ncells = static_cast<std::uint64_t>(data.num_cells);
 
-  read_attributes(path, reader, optional_child(path, piece, "PointData"), "point", npoints,
-                  data.point_data);
-  read_attributes(path, reader, optional_child(path, piece, "CellData"), "cell", ncells,
+  read_attributes(path, reader, optional_child(path, grid, "FieldData"), "field", -1,
+                  data.field_data);
+  if (auto t = data.field_data.find("TimeValue");
+      t != data.field_data.end() && t->second.f64.size() == 1)
+    data.time = t->second.f64[0];
+  read_attributes(path, reader, optional_child(path, piece, "PointData"), "point",
+                  data.num_points, data.point_data);
+  read_attributes(path, reader, optional_child(path, piece, "CellData"), "cell", data.num_cells,
                   data.cell_data);
 
   const XmlElement& points = only_child(path, piece, "Points");
@@ -613,6 +635,17 @@ VtuData read_vtu(const std::string& path) {
   // After the furthest array: the closing tags and nothing else.
   parser.seek(pos + 1 + appended.end());
   parser.run();
+
+  // The writer's empty-grid placeholder (vtu.hpp): no point, one polygon of no nodes.
+  if (data.num_points == 0 && data.num_cells == 1 && data.types[0] == 7 && data.offsets[0] == 0) {
+    data.num_cells = 0;
+    data.offsets.clear();
+    data.types.clear();
+    for (auto& [name, a] : data.cell_data) {
+      a.f64.clear();
+      a.i32.clear();
+    }
+  }
   return data;
 }
 

@@ -4,8 +4,11 @@
 // formed XML head (VTKFile root, UnstructuredGrid, Piece with NumberOfPoints/NumberOfCells),
 // every array's decoded length against NumberOfPoints or NumberOfCells times its components,
 // and the cells against the points. Any defect throws std::runtime_error naming the file.
+// It also reads <FieldData> arrays of the grid (the writer's TimeValue), and returns a grid
+// written with the empty-grid placeholder (vtu.hpp: one 0-node polygon, no point) as 0 cells.
 #pragma once
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -24,7 +27,13 @@ struct VtuData {
   std::vector<std::int64_t> offsets;       // end offset of each cell
   std::vector<std::uint8_t> types;         // VTK cell types
   // Arrays by name. Float32/Float64 arrays fill f64; integer arrays fill i32 (values must fit).
+  // Arrays by name; their `type` says how the file stored them (Float32/64 or an integer type),
+  // and component_names holds the file's ComponentName attributes.
   std::map<std::string, VtuArray> point_data, cell_data;
+  // Field data of the grid (<UnstructuredGrid><FieldData>), NumberOfTuples tuples each.
+  std::map<std::string, VtuArray> field_data;
+  // The grid's TimeValue field data (s), NaN when the file has none.
+  double time = std::numeric_limits<double>::quiet_NaN();
 };
 
 VtuData read_vtu(const std::string& path);

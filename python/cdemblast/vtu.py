@@ -14,7 +14,12 @@ Layout of one appended array (vtu.cpp, write_vtu):
 Arrays are decoded lazily (on first access) and cached, so reading only `damage` from a
 large 3D file does not decompress the stress tensor.
 
-    from cdem_vtu import read_vtu, read_pvd
+The grid's field data (<UnstructuredGrid><FieldData>) is read too: `grid.time` is the
+TimeValue the writer puts in every file (None without it). A grid written with the writer's
+empty-grid placeholder (no point, one polygon of no nodes: see src/cdem/io/vtu.hpp) reads as
+0 cells.
+
+    from cdemblast.vtu import read_vtu, read_pvd
     grid = read_vtu("run/fields/fields_0003.vtu")
     grid.points            # (npoints, 3) float64
     grid.cell_array("damage")          # (ncells,) or None when absent
@@ -31,7 +36,7 @@ import zlib
 
 import numpy as np
 
-VTK_LINE, VTK_TRIANGLE, VTK_QUAD, VTK_TETRA = 3, 5, 9, 10
+VTK_LINE, VTK_TRIANGLE, VTK_POLYGON, VTK_QUAD, VTK_TETRA = 3, 5, 7, 9, 10
 
 _DTYPES = {
     "Int8": "i1", "UInt8": "u1", "Int16": "i2", "UInt16": "u2",
@@ -54,6 +59,15 @@ class VtuGrid:
         self._arrays = arrays  # (section, name) -> DataArray element
         self._decode = decode
         self._cache = {}
+        self.placeholder = False
+        if npoints == 0 and ncells == 1:
+            # The writer's empty-grid placeholder: one polygon without nodes, no point.
+            types, offsets = self._get("cells", "types"), self._get("cells", "offsets")
+            if (types is not None and offsets is not None and types.size == 1
+                    and int(types[0]) == VTK_POLYGON and int(offsets[0]) == 0):
+                self.placeholder = True
+                self.ncells = 0
+            self._cache.clear()
 
     # ---- array access ----
     def _get(self, section, name):
@@ -64,8 +78,43 @@ class VtuGrid:
             n = self.npoints if section in ("point", "points") else self.ncells
             if section == "cells":
                 n = None
-            self._cache[key] = self._decode(self._arrays[key], n)
+            elif section == "field":
+                n = int(self._arrays[key].get("NumberOfTuples", "1"))
+            elif section == "cell" and getattr(self, "placeholder", False):
+                n = 1
+            v = self._decode(self._arrays[key], n)
+            if getattr(self, "placeholder", False) and section in ("cell", "cells"):
+                v = v[:0]
+            self._cache[key] = v
         return self._cache[key]
+
+    @property
+    def field_array_names(self):
+        return [n for (s, n) in self._arrays if s == "field"]
+
+    def field_array(self, name):
+        """A field-data array of the grid (e.g. TimeValue), or None when absent."""
+        return self._get("field", name)
+
+    @property
+    def time(self):
+        """The TimeValue field data (s), or None when the file has none."""
+        t = self.field_array("TimeValue")
+        return float(np.ravel(t)[0]) if t is not None and np.size(t) else None
+
+    def component_names(self, section, name):
+        """ComponentName0.. of a 'point' or 'cell' array ([] when not named or absent)."""
+        da = self._arrays.get((section, name))
+        if da is None:
+            return []
+        n = int(da.get("NumberOfComponents", "1"))
+        names = [da.get(f"ComponentName{i}") for i in range(n)]
+        return names if all(names) else []
+
+    def array_type(self, section, name):
+        """The VTK type name ('Float64', 'Int32', ...) of an array, or None when absent."""
+        da = self._arrays.get((section, name))
+        return None if da is None else da.get("type")
 
     @property
     def point_array_names(self):
@@ -168,6 +217,9 @@ def read_vtu(path):
     ncells = int(piece.get("NumberOfCells", "0"))
 
     arrays = {}
+    fd = root.find("UnstructuredGrid/FieldData")
+    for da in ([] if fd is None else fd.findall("DataArray")):
+        arrays[("field", da.get("Name", ""))] = da
     for section, tag in (("point", "PointData"), ("cell", "CellData"),
                          ("points", "Points"), ("cells", "Cells")):
         el = piece.find(tag)

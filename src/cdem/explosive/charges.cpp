@@ -10,6 +10,7 @@
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 #include "cdem/physics/springs.hpp"
+#include "cdem/explosive/gas.hpp"
 #include "cdem/physics/ties.hpp"
 
 namespace cdem {
@@ -91,6 +92,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
   std::vector<std::vector<std::int32_t>> elem_segs;  // by block, filled sparsely
   std::vector<std::int32_t> elem_slot(m.n_blocks(), -1);
   std::vector<double> vch(m.n_blocks(), 0.0);  // charge volume held by each block (m^3)
+  std::vector<std::vector<std::pair<std::int32_t, double>>> bar_share(m.n_blocks());  // (bar, m^3)
   std::vector<Vec3> lo(m.n_blocks()), hi(m.n_blocks());
   for (std::size_t b = 0; b < m.n_blocks(); ++b) block_bbox(m, static_cast<std::int32_t>(b), lo[b], hi[b]);
 
@@ -183,8 +185,14 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
           if (!(host > 0)) continue;
           const double phi = section * (u1 - u0) * bar.length / host;
           for (const auto& x : iv)
-            if (x.s0 <= mid && mid <= x.s1)
-              vch[x.block] += phi * m.block_volume0[x.block] * (u1 - u0) / (x.s1 - x.s0);
+            if (x.s0 <= mid && mid <= x.s1) {
+              const double share = phi * m.block_volume0[x.block] * (u1 - u0) / (x.s1 - x.s0);
+              vch[x.block] += share;
+              auto& lst = bar_share[x.block];
+              const auto kbar = static_cast<std::int32_t>(bc.bars.size());
+              if (lst.empty() || lst.back().first != kbar) lst.push_back({kbar, 0.0});
+              lst.back().second += share;
+            }
         }
       }
       // A bar loads only the blocks on its line: when they are much smaller than the charge
@@ -230,6 +238,27 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         bc.seg_elem_offset.push_back(static_cast<std::int32_t>(bc.seg_elem.size()));
       }
       bar.seg_end = static_cast<std::int32_t>(bc.seg_bar.size());
+      // gas body (gas.hpp)
+      bar.gas = hole.gas;
+      bar.rho_w = explosive_density(bc.eos[bar.eos]);
+      bar.v0 = section * bar.length;
+      bar.section = section;
+      bar.vent_cd = hole.vent_coefficient;
+      {
+        // the collar stemming above the hole's top deck
+        const Vec3 up = normalized(hole.collar - hole.end);
+        const double top = dot(deck.top - hole.end, up);
+        const bool topmost = di + 1 == hole.decks.size();
+        if (topmost) {
+          double len = 0;
+          for (const auto& st : hole.stemming)
+            if (st.first >= top - 1e-9) len += st.second - st.first;
+          bar.plug_length = len;
+          bar.plug_mass = hole.stemming_density * section * len;
+          bar.plug_shear = hole.stemming_shear_strength;
+          bar.collar_open = len <= 1e-9 * hole.length();
+        }
+      }
       bc.bars.push_back(bar);
     }
   }
@@ -265,6 +294,56 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     bc.elem_seg.insert(bc.elem_seg.end(), v.begin(), v.end());
     bc.elem_seg_offset.push_back(static_cast<std::int32_t>(bc.elem_seg.size()));
   }
+  bc.elem_bar_offset.assign(1, 0);
+  for (const auto b : bc.elem_block) {
+    for (const auto& [k, v] : bar_share[b]) {
+      bc.elem_bar.push_back(k);
+      bc.elem_bar_vch.push_back(v);
+    }
+    bc.elem_bar_offset.push_back(static_cast<std::int32_t>(bc.elem_bar.size()));
+  }
+  bc.gas.assign(bc.bars.size(), BarCharges::DeckGas{});
+  bc.iface_fill.assign(m.n_ifaces(), 0.0f);
+  bc.iface_deck.assign(m.n_ifaces(), -1);
+  bc.iface_gas_p.assign(m.n_ifaces(), 0.0f);
+  bc.block_deck.assign(m.n_blocks(), -1);
+  bc.block_exterior.assign(m.n_blocks(), 0);
+  for (std::size_t b = 0; b < m.n_blocks(); ++b)
+    bc.block_exterior[b] = m.block_iface_offset[b + 1] - m.block_iface_offset[b] <
+                           local_faces(m.block_type[b]).count;
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i)
+    for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e)
+      if (bc.block_deck[bc.elem_block[i]] < 0) bc.block_deck[bc.elem_block[i]] = bc.elem_bar[e];
+  // Where the charge fills its blocks (phi >= 0.5: charge blocks, glued to their neighbours), the
+  // cavity's wall is the neighbours' faces: the gas reaches them from the start.
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+    if (bc.elem_phi[i] < 0.5) continue;
+    const auto b = bc.elem_block[i];
+    for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+      const std::int32_t code = m.block_iface_list[e];
+      const std::size_t f = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
+      const auto other = code > 0 ? m.iface_block_b[f] : m.iface_block_a[f];
+      if (bc.block_deck[other] < 0) bc.block_deck[other] = bc.block_deck[b];
+    }
+  }
+  // An unstemmed collar vents only where the charge is a small part of its top block: where it
+  // fills its blocks (phi >= 0.5, charge blocks) the top block's own stretching past the collar is
+  // the products' escape, as for a solid charge's explosive blocks.
+  for (auto& bar : bc.bars) {
+    if (!bar.collar_open) continue;
+    const Vec3 top = bar.start + bar.length * bar.dir;
+    double best = std::numeric_limits<double>::infinity();
+    double phi = 0;
+    for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+      const auto b = bc.elem_block[i];
+      Vec3 cen{};
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) cen += m.X(n);
+      cen = cen / (m.block_first_node[b + 1] - m.block_first_node[b]);
+      const double d = norm(cen - top);
+      if (d < best) best = d, phi = bc.elem_phi[i];
+    }
+    if (phi >= 0.5) bar.collar_open = false;
+  }
   bc.seg_p.assign(bc.seg_bar.size(), 0.0);
   bc.seg_v.assign(bc.seg_bar.size(), 1.0);
   bc.seg_xi.assign(bc.seg_bar.size(), 0.0);
@@ -291,15 +370,18 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
   const std::size_t ns = bc.n_segments();
   for (std::size_t j = 0; j < ns; ++j) {
     const auto& bar = bc.bars[bc.seg_bar[j]];
+    const double xi = std::clamp((t - bc.seg_t_ign[j]) * bar.D / bar.h, 0.0, 1.0);  // eq. 12, 13
+    bc.seg_xi[j] = xi;
+    if (bar.gas != GasModel::Literal) continue;  // the deck's gas body (gas.hpp)
     double theta = 0;
     const auto e0 = bc.seg_elem_offset[j], e1 = bc.seg_elem_offset[j + 1];
     for (auto e = e0; e < e1; ++e) theta += m.vol_ratio[bc.seg_elem[e]] - 1.0;
     const double v = 1.0 + theta / (e1 - e0);                               // eq. 9
-    const double xi = std::clamp((t - bc.seg_t_ign[j]) * bar.D / bar.h, 0.0, 1.0);  // eq. 12, 13
     bc.seg_v[j] = v;
-    bc.seg_xi[j] = xi;
     bc.seg_p[j] = xi > 0 ? xi * eos_pressure(bc.eos[bar.eos], v) : 0.0;     // eq. 10, 11
   }
+  update_deck_gas(m, bc, out, bc.t_last >= 0 ? t - bc.t_last : 0.0);
+  bc.t_last = t;
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     double pbar = 0;
     const auto s0 = bc.elem_seg_offset[i], s1 = bc.elem_seg_offset[i + 1];
@@ -510,7 +592,9 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
 }
 
 void write_charge_header(std::FILE* f) {
-  std::fputs("time,hole,deck,model,pressure,volume_ratio,burnt_fraction\n", f);
+  std::fputs("time,hole,deck,model,pressure,volume_ratio,burnt_fraction,gas_volume,gas_mass_charge,"
+             "gas_mass_cracks,vented_mass,gas_work,plug_displacement\n",
+             f);
 }
 
 void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const SolidCharges& sc) {
@@ -522,8 +606,17 @@ void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const Solid
       v += bc.seg_v[j];
       xi += bc.seg_xi[j];
     }
-    std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g\n", t, bar.hole.c_str(), bar.deck + 1, p / n,
-                 v / n, xi / n);
+    const std::size_t k = static_cast<std::size_t>(&bar - bc.bars.data());
+    const auto& gs = bc.gas[k];
+    if (bar.gas == GasModel::Literal) {
+      std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g,%.9g,%.9g,0,0,0,0\n", t, bar.hole.c_str(),
+                   bar.deck + 1, p / n, v / n, xi / n, bar.v0 * v / n, bar.rho_w * bar.v0 * xi / n);
+    } else {
+      const double vol = gs.volume(), mgas = gs.burnt - gs.vented;
+      std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", t,
+                   bar.hole.c_str(), bar.deck + 1, gs.pressure, bar.v0 > 0 ? vol / bar.v0 : 1.0,
+                   xi / n, vol, mgas - gs.m_cracks, gs.m_cracks, gs.vented, gs.work, gs.plug_x);
+    }
   }
   for (std::size_t k = 0; k < sc.charges.size(); ++k) {
     // Volume-weighted means over the deck's explosive blocks.
@@ -535,8 +628,9 @@ void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const Solid
       vol += sc.v[i] * sc.v0[i];
       burnt += sc.lambda[i] * sc.v0[i];
     }
-    std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g\n", t, sc.charges[k].hole.c_str(),
-                 sc.charges[k].deck + 1, p / vol0, vol / vol0, burnt / vol0);
+    std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g,%.9g,%.9g,0,0,0,0\n", t,
+                 sc.charges[k].hole.c_str(), sc.charges[k].deck + 1, p / vol0, vol / vol0,
+                 burnt / vol0, vol, burnt * explosive_density(sc.eos[sc.charges[k].eos]));
   }
 }
 

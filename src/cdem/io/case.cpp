@@ -189,7 +189,8 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 
   for (const auto& t : top.array_of_tables("hole")) {
     t.check_known({"name", "collar", "end", "direction", "depth", "diameter", "model",
-                   "attenuation_exponent", "attenuation_length", "cavity", "charge"});
+                   "attenuation_exponent", "attenuation_length", "cavity", "charge", "gas",
+                   "stemming_density", "stemming_shear_strength", "vent_coefficient"});
     HoleDef h;
     h.name = t.string("name");
     h.collar = t.vec("collar");
@@ -210,6 +211,16 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
     h.model = t.choice("model", {"bar", "solid"}, "bar") == "bar" ? ChargeModel::Bar : ChargeModel::Solid;
     h.attenuation_exponent = t.non_negative("attenuation_exponent", 1.25);
     h.cavity = t.boolean("cavity", true);
+    {
+      const std::string g = t.choice("gas", {"literal", "cavity", "cracks"}, "cracks");
+      h.gas = g == "literal" ? GasModel::Literal : (g == "cavity" ? GasModel::Cavity : GasModel::Cracks);
+    }
+    h.stemming_density = t.positive("stemming_density", 2000.0);
+    h.stemming_shear_strength = t.non_negative("stemming_shear_strength", 1e6);
+    h.vent_coefficient = t.positive("vent_coefficient", 1.0);
+    if (h.vent_coefficient > 1.0)
+      throw InputError(fmt::format("{}: expected a discharge coefficient in (0, 1], got {}",
+                                   t.where("vent_coefficient"), h.vent_coefficient));
     h.lc_element_size =
         t.choice("attenuation_length", {"equivalent_radius", "element_size"}, "equivalent_radius") ==
         "element_size";
@@ -599,10 +610,14 @@ std::string resolved_case_toml(const Case& c) {
   }
   for (const auto& h : c.holes) {
     o += fmt::format("\n[[hole]]\nname = {}\ncollar = {}\nend = {}\ndiameter = {:.17g}\nmodel = {}\n"
-                     "attenuation_exponent = {:.17g}\nattenuation_length = {}\ncavity = {}\n",
+                     "attenuation_exponent = {:.17g}\nattenuation_length = {}\ncavity = {}\n"
+                     "gas = {}\nstemming_density = {:.17g}\nstemming_shear_strength = {:.17g}\n"
+                     "vent_coefficient = {:.17g}\n",
                      q(h.name), vec_str(h.collar), vec_str(h.end), h.diameter,
                      q(h.model == ChargeModel::Bar ? "bar" : "solid"), h.attenuation_exponent,
-                     q(h.lc_element_size ? "element_size" : "equivalent_radius"), h.cavity);
+                     q(h.lc_element_size ? "element_size" : "equivalent_radius"), h.cavity,
+                     q(name_of(h.gas)), h.stemming_density, h.stemming_shear_strength,
+                     h.vent_coefficient);
     // Charges from the bottom up, stemming between them.
     std::vector<std::pair<double, std::string>> items;
     const Vec3 up = normalized(h.collar - h.end);

@@ -77,6 +77,17 @@ struct Deck {
 
 enum class ChargeModel { Bar, Solid };
 
+// The bar's detonation products (docs/theory.md "Bar charges: the gas"): "literal" is SPEC 2 as
+// written (each segment's volume V0 (1 + theta_e) from its bound blocks' mean strain, eq. 9);
+// "cavity" makes each deck one gas body filling the cavity the rock opens around it (the bound
+// blocks' whole volume change), pushing the collar stemming out as a plug and venting through the
+// collar; "cracks" adds the opened cracks connected to the charge, which the gas invades and
+// pushes apart, and venting where they reach a free surface.
+enum class GasModel { Literal, Cavity, Cracks };
+inline const char* name_of(GasModel g) {
+  return g == GasModel::Literal ? "literal" : (g == GasModel::Cavity ? "cavity" : "cracks");
+}
+
 struct HoleDef {
   std::string name;
   Vec3 collar, end;         // collar (top) and bottom of the hole
@@ -86,6 +97,10 @@ struct HoleDef {
   bool cavity = true;       // bar model: the charge's share of a bound element is not rock
   bool lc_element_size = false;  // bar model: L_c in (r0/L_c)^a is the element size (SPEC read
                                  // literally), not its equivalent radius about the bar
+  GasModel gas = GasModel::Cracks;   // bar model: the products' volume and venting
+  double stemming_density = 2000;    // kg/m^3, the collar stemming plug
+  double stemming_shear_strength = 1e6;  // Pa, wall shear stress resisting the plug
+  double vent_coefficient = 1.0;     // discharge coefficient of the choked vents
   std::vector<Deck> decks;
   std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
   double length() const { return norm(collar - end); }

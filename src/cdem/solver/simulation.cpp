@@ -222,7 +222,20 @@ void Simulation::step(bool sample) {
   lap(kStepSprings);
   // 3. block forces (assign f), each block adding its nodes' spring forces right after
   std::int32_t first = -1;
-  const auto inv = block_forces(m_, &first, /*gather_springs=*/true);
+  auto inv = block_forces(m_, &first, /*gather_springs=*/true);
+  if (inv > 0) {
+    // A bar's charge blocks (mostly products: little or no rock stiffness) may collapse once the
+    // gas has left them; that is not the rock inverting (the run goes on). Recounted here, in
+    // the rare steps with an inversion.
+    inv = 0;
+    first = -1;
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b)
+      if (!(m_.vol_ratio[b] > 0) && !m_.block_materials[m_.block_material[b]].charge_block &&
+          m_.block_materials[m_.block_material[b]].explosive.empty()) {
+        if (first < 0) first = static_cast<std::int32_t>(b);
+        ++inv;
+      }
+  }
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
   lap(kStepBlocks);

@@ -51,6 +51,9 @@ inline HoleDef make_hole(const std::string& name, Vec3 collar, Vec3 end, double 
   h.diameter = diameter;
   h.model = model;
   h.attenuation_exponent = attenuation;
+  // The tests of SPEC 2 and 3's equations (eq. 9's volume, a solid block's own pressure) use the
+  // literal gas model; the gas bodies have their own tests (test_gas.cpp) and set it.
+  h.gas = GasModel::Literal;
   const Vec3 up = normalized(collar - end);
   double s = 0;
   for (const auto& ds : decks) {

@@ -238,26 +238,29 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         bc.seg_elem_offset.push_back(static_cast<std::int32_t>(bc.seg_elem.size()));
       }
       bar.seg_end = static_cast<std::int32_t>(bc.seg_bar.size());
-      // gas body (gas.hpp)
+      // the deck's gas body (gas.hpp)
       bar.gas = hole.gas;
-      bar.rho_w = explosive_density(bc.eos[bar.eos]);
-      bar.v0 = section * bar.length;
-      bar.section = section;
-      bar.vent_cd = hole.vent_coefficient;
       {
+        GasBody gb;
+        gb.model = hole.gas;
+        gb.eos = bar.eos;
+        gb.rho_w = explosive_density(bc.eos[bar.eos]);
+        gb.v0 = section * bar.length;
+        gb.section = section;
+        gb.vent_cd = hole.vent_coefficient;
         // the collar stemming above the hole's top deck
         const Vec3 up = normalized(hole.collar - hole.end);
         const double top = dot(deck.top - hole.end, up);
-        const bool topmost = di + 1 == hole.decks.size();
-        if (topmost) {
+        if (di + 1 == hole.decks.size()) {
           double len = 0;
           for (const auto& st : hole.stemming)
             if (st.first >= top - 1e-9) len += st.second - st.first;
-          bar.plug_length = len;
-          bar.plug_mass = hole.stemming_density * section * len;
-          bar.plug_shear = hole.stemming_shear_strength;
-          bar.collar_open = len <= 1e-9 * hole.length();
+          gb.plug_length = len;
+          gb.plug_mass = hole.stemming_density * section * len;
+          gb.plug_shear = hole.stemming_shear_strength;
+          gb.collar_open = len <= 1e-9 * hole.length();
         }
+        bc.gas.bodies.push_back(gb);
       }
       bc.bars.push_back(bar);
     }
@@ -302,38 +305,21 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     }
     bc.elem_bar_offset.push_back(static_cast<std::int32_t>(bc.elem_bar.size()));
   }
-  bc.gas.assign(bc.bars.size(), BarCharges::DeckGas{});
-  bc.iface_fill.assign(m.n_ifaces(), 0.0f);
-  bc.iface_deck.assign(m.n_ifaces(), -1);
-  bc.iface_gas_p.assign(m.n_ifaces(), 0.0f);
-  bc.block_deck.assign(m.n_blocks(), -1);
-  bc.block_exterior.assign(m.n_blocks(), 0);
-  for (std::size_t b = 0; b < m.n_blocks(); ++b)
-    bc.block_exterior[b] = m.block_iface_offset[b + 1] - m.block_iface_offset[b] <
-                           local_faces(m.block_type[b]).count;
+  init_gas_field(m, bc.gas);
+  // The gas starts in the blocks that hold the charge; where the charge fills its blocks (phi >=
+  // 0.5: charge blocks, glued to their neighbours) the cavity's wall is the neighbours' faces.
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i)
     for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e)
-      if (bc.block_deck[bc.elem_block[i]] < 0) bc.block_deck[bc.elem_block[i]] = bc.elem_bar[e];
-  // Where the charge fills its blocks (phi >= 0.5: charge blocks, glued to their neighbours), the
-  // cavity's wall is the neighbours' faces: the gas reaches them from the start.
-  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
-    if (bc.elem_phi[i] < 0.5) continue;
-    const auto b = bc.elem_block[i];
-    for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
-      const std::int32_t code = m.block_iface_list[e];
-      const std::size_t f = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
-      const auto other = code > 0 ? m.iface_block_b[f] : m.iface_block_a[f];
-      if (bc.block_deck[other] < 0) bc.block_deck[other] = bc.block_deck[b];
-    }
-  }
+      seed_gas(m, bc.gas, bc.elem_block[i], bc.elem_bar[e], bc.elem_phi[i] >= 0.5);
   // An unstemmed collar vents only where the charge is a small part of its top block: where it
-  // fills its blocks (phi >= 0.5, charge blocks) the top block's own stretching past the collar is
-  // the products' escape, as for a solid charge's explosive blocks.
-  for (auto& bar : bc.bars) {
-    if (!bar.collar_open) continue;
+  // fills its blocks (phi >= 0.5) the top block's own stretching past the collar is the products'
+  // escape, as for a solid charge's explosive blocks.
+  for (std::size_t k = 0; k < bc.bars.size(); ++k) {
+    GasBody& gb = bc.gas.bodies[k];
+    if (!gb.collar_open) continue;
+    const auto& bar = bc.bars[k];
     const Vec3 top = bar.start + bar.length * bar.dir;
-    double best = std::numeric_limits<double>::infinity();
-    double phi = 0;
+    double best = std::numeric_limits<double>::infinity(), phi = 0;
     for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
       const auto b = bc.elem_block[i];
       Vec3 cen{};
@@ -342,7 +328,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
       const double d = norm(cen - top);
       if (d < best) best = d, phi = bc.elem_phi[i];
     }
-    if (phi >= 0.5) bar.collar_open = false;
+    if (phi >= 0.5) gb.collar_open = false;
   }
   bc.seg_p.assign(bc.seg_bar.size(), 0.0);
   bc.seg_v.assign(bc.seg_bar.size(), 1.0);
@@ -380,7 +366,43 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
     bc.seg_v[j] = v;
     bc.seg_p[j] = xi > 0 ? xi * eos_pressure(bc.eos[bar.eos], v) : 0.0;     // eq. 10, 11
   }
-  update_deck_gas(m, bc, out, bc.t_last >= 0 ? t - bc.t_last : 0.0);
+  if (bc.gas.any()) {
+    // Each deck's burnt charge and its cavity: the charge volume V_i a bound block holds plus
+    // the block's whole volume change, shared by the bars in it by charge volume, times the
+    // block's burnt fraction for the bar (the mean of its segments of the bar).
+    std::fill(bc.gas.burnt_volume.begin(), bc.gas.burnt_volume.end(), 0.0);
+    std::fill(bc.gas.cavity.begin(), bc.gas.cavity.end(), 0.0);
+    for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
+      const auto b = bc.elem_block[i];
+      double all = 0;
+      for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e) all += bc.elem_bar_vch[e];
+      if (!(all > 0)) continue;
+      // (a collapsed or inverted block holds no gas: J taken as 0 at most)
+      const double dv = (std::max(m.vol_ratio[b], 0.0) - 1.0) * m.block_volume0[b];
+      for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e) {
+        const auto k = bc.elem_bar[e];
+        if (bc.bars[k].gas == GasModel::Literal) continue;
+        double xi = 0;
+        int n = 0;
+        for (auto q = bc.elem_seg_offset[i]; q < bc.elem_seg_offset[i + 1]; ++q)
+          if (bc.seg_bar[bc.elem_seg[q]] == k) xi += bc.seg_xi[bc.elem_seg[q]], ++n;
+        xi = n ? xi / n : 0.0;
+        const double vch = bc.elem_bar_vch[e];
+        bc.gas.burnt_volume[k] += xi * vch;
+        bc.gas.cavity[k] += xi * (vch + dv * vch / all);
+      }
+    }
+    update_gas(m, bc.gas, bc.eos, out, bc.t_last >= 0 ? t - bc.t_last : 0.0);
+    for (std::size_t k = 0; k < bc.bars.size(); ++k) {
+      const auto& bar = bc.bars[k];
+      if (bar.gas == GasModel::Literal) continue;
+      const GasBody& gb = bc.gas.bodies[k];
+      for (auto j = bar.seg_begin; j < bar.seg_end; ++j) {
+        bc.seg_p[j] = bc.seg_xi[j] > 0 ? bc.seg_xi[j] * gb.pressure : 0.0;  // eq. 13, deck P
+        bc.seg_v[j] = gb.v0 > 0 ? gb.volume() / gb.v0 : 1.0;
+      }
+    }
+  }
   bc.t_last = t;
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     double pbar = 0;
@@ -498,6 +520,25 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
       ch.D = detonation_velocity(sc.eos[ch.eos]);
       decks.push_back({&h, d, static_cast<std::int32_t>(sc.charges.size())});
       sc.charges.push_back(ch);
+      // the deck's gas body (gas.hpp): its cavity is its explosive blocks' volume
+      GasBody gb;
+      gb.model = h.gas;
+      gb.eos = ch.eos;
+      gb.rho_w = explosive_density(sc.eos[ch.eos]);
+      const double section = m.dim == 3 ? kPi * 0.25 * h.diameter * h.diameter : h.diameter;
+      gb.section = section;
+      gb.vent_cd = h.vent_coefficient;
+      if (d + 1 == h.decks.size()) {
+        const Vec3 up = normalized(h.collar - h.end);
+        const double top = dot(h.decks[d].top - h.end, up);
+        double len = 0;
+        for (const auto& st : h.stemming)
+          if (st.first >= top - 1e-9) len += st.second - st.first;
+        gb.plug_length = len;
+        gb.plug_mass = h.stemming_density * section * len;
+        gb.plug_shear = h.stemming_shear_strength;
+      }
+      sc.gas.bodies.push_back(gb);
     }
   }
   std::vector<int> used(sc.charges.size(), 0);
@@ -544,6 +585,11 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
                                    "inside it; mesh the charge as a region whose material has "
                                    "'explosive' set",
                                    c.path, sc.charges[k].hole, sc.charges[k].deck + 1));
+  init_gas_field(m, sc.gas);
+  for (std::size_t i = 0; i < sc.block.size(); ++i) {
+    seed_gas(m, sc.gas, sc.block[i], sc.charge[i], true);
+    sc.gas.bodies[sc.charge[i]].v0 += sc.v0[i];
+  }
   sc.p.assign(sc.block.size(), 0.0);
   sc.lambda.assign(sc.block.size(), 0.0);
   sc.dead.assign(sc.block.size(), 0);
@@ -552,6 +598,25 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
 }
 
 void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
+  // Decks with a gas body (gas = cavity or cracks): one pressure per deck from the burnt
+  // blocks' total volume (a collapsing block no longer gets the pressure of its own tiny volume).
+  if (sc.gas.any()) {
+    std::fill(sc.gas.burnt_volume.begin(), sc.gas.burnt_volume.end(), 0.0);
+    std::fill(sc.gas.cavity.begin(), sc.gas.cavity.end(), 0.0);
+    for (std::size_t i = 0; i < sc.block.size(); ++i) {
+      const auto b = sc.block[i];
+      const auto n0 = m.block_first_node[b];
+      const int nn = nodes_of(m.block_type[b]);
+      Vec3 p[4];
+      for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
+      const double v = signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
+      const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
+      sc.gas.burnt_volume[sc.charge[i]] += lam * sc.v0[i];
+      sc.gas.cavity[sc.charge[i]] += lam * std::max(v, 0.0) * sc.v0[i];
+    }
+    update_gas(m, sc.gas, sc.eos, out, sc.t_last >= 0 ? t - sc.t_last : 0.0);
+  }
+  sc.t_last = t;
   for (std::size_t i = 0; i < sc.block.size(); ++i) {
     const auto b = sc.block[i];
     const auto n0 = m.block_first_node[b];
@@ -584,7 +649,9 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
     const auto& ch = sc.charges[sc.charge[i]];
     const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
     sc.lambda[i] = lam;
-    const double pr = (sc.dead[i] || lam <= 0) ? 0.0 : lam * eos_pressure(sc.eos[ch.eos], v);
+    const GasBody& gb = sc.gas.bodies[sc.charge[i]];
+    const double p_products = gb.model == GasModel::Literal ? eos_pressure(sc.eos[ch.eos], v) : gb.pressure;
+    const double pr = (sc.dead[i] || lam <= 0) ? 0.0 : lam * p_products;
     sc.p[i] = pr;
     m.stress[b] = {-pr, -pr, -pr, 0, 0, 0};
     if (pr > 0) inflate_block(m, b, pr, out);
@@ -607,14 +674,14 @@ void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const Solid
       xi += bc.seg_xi[j];
     }
     const std::size_t k = static_cast<std::size_t>(&bar - bc.bars.data());
-    const auto& gs = bc.gas[k];
+    const GasBody& gs = bc.gas.bodies[k];
     if (bar.gas == GasModel::Literal) {
       std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g,%.9g,%.9g,0,0,0,0\n", t, bar.hole.c_str(),
-                   bar.deck + 1, p / n, v / n, xi / n, bar.v0 * v / n, bar.rho_w * bar.v0 * xi / n);
+                   bar.deck + 1, p / n, v / n, xi / n, gs.v0 * v / n, gs.rho_w * gs.v0 * xi / n);
     } else {
-      const double vol = gs.volume(), mgas = gs.burnt - gs.vented;
+      const double vol = gs.volume(), mgas = gs.gas_mass();
       std::fprintf(f, "%.9g,%s,%d,bar,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", t,
-                   bar.hole.c_str(), bar.deck + 1, gs.pressure, bar.v0 > 0 ? vol / bar.v0 : 1.0,
+                   bar.hole.c_str(), bar.deck + 1, gs.pressure, gs.v0 > 0 ? vol / gs.v0 : 1.0,
                    xi / n, vol, mgas - gs.m_cracks, gs.m_cracks, gs.vented, gs.work, gs.plug_x);
     }
   }
@@ -628,9 +695,16 @@ void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const Solid
       vol += sc.v[i] * sc.v0[i];
       burnt += sc.lambda[i] * sc.v0[i];
     }
-    std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g,%.9g,%.9g,0,0,0,0\n", t,
-                 sc.charges[k].hole.c_str(), sc.charges[k].deck + 1, p / vol0, vol / vol0,
-                 burnt / vol0, vol, burnt * explosive_density(sc.eos[sc.charges[k].eos]));
+    const GasBody& gs = sc.gas.bodies[k];
+    if (gs.model == GasModel::Literal)
+      std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g,%.9g,%.9g,0,0,0,0\n", t,
+                   sc.charges[k].hole.c_str(), sc.charges[k].deck + 1, p / vol0, vol / vol0,
+                   burnt / vol0, vol, burnt * explosive_density(sc.eos[sc.charges[k].eos]));
+    else
+      std::fprintf(f, "%.9g,%s,%d,solid,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", t,
+                   sc.charges[k].hole.c_str(), sc.charges[k].deck + 1, gs.pressure,
+                   gs.v0 > 0 ? gs.volume() / gs.v0 : 1.0, burnt / vol0, gs.volume(),
+                   gs.gas_mass() - gs.m_cracks, gs.m_cracks, gs.vented, gs.work, gs.plug_x);
   }
 }
 

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "cdem/explosive/eos.hpp"
+#include "cdem/explosive/gas.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 #include "cdem/solver/simulation.hpp"
@@ -41,33 +42,10 @@ struct BarCharges {
     bool lc_element_size = false;  // attenuation with L_c = element size (SPEC literal)
     Vec3 start, dir;             // initiation point and unit direction along the bar
     std::int32_t seg_begin = 0, seg_end = 0;
-    GasModel gas = GasModel::Cracks;
-    double rho_w = 0;            // explosive density (kg/m^3)
-    double v0 = 0;               // charge volume (m^3; 2D per metre)
-    // collar stemming plug (the hole's top deck when stemming lies above it): length (m), mass
-    // (kg), wall shear strength (Pa), hole cross-section (m^2); open: the deck reaches the collar
-    double plug_length = 0, plug_mass = 0, plug_shear = 0, section = 0;
-    bool collar_open = false;
-    double vent_cd = 1.0;
+    GasModel gas = GasModel::Cracks;  // (its gas body is gas.bodies[bar index])
   };
-  // The state of each deck's gas body (gas model cavity or cracks; gas.hpp).
-  struct DeckGas {
-    double burnt = 0;            // burnt mass (kg)
-    double vented = 0;           // mass vented so far (kg)
-    double v_cavity = 0;         // volume of the burnt charge's cavity (m^3)
-    double v_cracks = 0;         // volume of the gas-filled cracks (m^3)
-    double m_cracks = 0;         // gas mass in them (kg)
-    double pressure = 0;         // Pa
-    double work = 0;             // int p dV of the gas (J)
-    double v_prev = 0;           // last volume (m^3), for the work
-    double plug_x = 0, plug_v = 0;  // plug displacement (m) and speed (m/s)
-    bool plug_out = false;
-    double vent_area = 0;        // this step's open vent area (m^2)
-    double volume() const { return v_cavity + v_cracks + section_plug; }
-    double section_plug = 0;     // volume behind the moving plug, section x plug_x (m^3)
-  };
-  std::vector<DeckGas> gas;                             // per bar (deck)
   std::vector<Bar> bars;
+  GasField gas;                                         // the decks' gas bodies (gas.hpp)
   std::vector<Eos> eos;
   // segments
   std::vector<std::int32_t> seg_bar;
@@ -85,13 +63,6 @@ struct BarCharges {
   // elem_bar (bar index), elem_bar_vch (m^3)
   std::vector<std::int32_t> elem_bar_offset, elem_bar;
   std::vector<double> elem_bar_vch;
-  // gas in cracks (gas model cracks): per interface the fill fraction of the crack and the deck
-  // whose gas it holds (-1 none), per block the deck whose gas reached it (-1 none)
-  std::vector<float> iface_fill;
-  std::vector<std::int32_t> iface_deck, block_deck;
-  std::vector<std::uint8_t> block_exterior;             // the block has a boundary face
-  std::vector<float> iface_gas_p;                       // this step's gas pressure (Pa), output
-  std::vector<double> gas_scratch;                      // work space of update_deck_gas
   double t_last = -1;                                   // time of the last bar_loads call
 
   bool empty() const { return bars.empty(); }
@@ -132,6 +103,8 @@ struct SolidCharges {
   std::vector<std::int32_t> block, charge;  // per explosive block
   std::vector<double> t_ign, burn_time, p, lambda, v0, v;  // v0: initial volume, v: V / V0
   std::vector<std::uint8_t> dead;
+  GasField gas;              // the decks' gas bodies (hole gas = cavity or cracks; gas.hpp)
+  double t_last = -1;        // time of the last solid_loads call
   double min_volume_ratio = 0.05;
   std::int64_t dead_count = 0;
   double dt_limit = 0;  // min altitude / D over explosive blocks (s)

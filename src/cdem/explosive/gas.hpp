@@ -27,9 +27,69 @@
 // tau_s (perimeter) (L_s - x) of its length still in the hole; out at x = L_s. Stemming between
 // decks holds (not modelled).
 #pragma once
-#include "cdem/explosive/charges.hpp"
+#include <cstdint>
+#include <vector>
+
+#include "cdem/explosive/eos.hpp"
+#include "cdem/explosive/gas_model.hpp"
+#include "cdem/model/model.hpp"
+#include "cdem/solver/simulation.hpp"
 
 namespace cdem {
+
+// One deck's products.
+struct GasBody {
+  // set-up
+  GasModel model = GasModel::Cracks;
+  std::int32_t eos = 0;        // index into the charge set's EOS table
+  double rho_w = 0;            // explosive density (kg/m^3)
+  double v0 = 0;               // charge volume (m^3; 2D per metre)
+  double section = 0;          // hole cross-section (m^2; 2D m per metre)
+  double plug_length = 0, plug_mass = 0, plug_shear = 0;  // collar stemming plug (m, kg, Pa)
+  bool collar_open = false;    // an unstemmed collar that vents (a small charge in its top block)
+  double vent_cd = 1.0;
+  // state
+  double burnt = 0;            // burnt mass (kg)
+  double vented = 0;           // mass vented so far (kg)
+  double v_cavity = 0;         // volume of the burnt charge's cavity (m^3)
+  double v_cracks = 0;         // volume of the gas-filled cracks (m^3)
+  double m_cracks = 0;         // gas mass in them (kg)
+  double pressure = 0;         // Pa
+  double work = 0;             // int p dV of the gas (J)
+  double v_prev = 0;           // last volume (m^3), for the work
+  double plug_x = 0, plug_v = 0;  // plug displacement (m) and speed (m/s)
+  bool plug_out = false;
+  double vent_area = 0;        // this step's open vent area (m^2)
+  double v_plug = 0;           // volume behind the moving plug, section x plug_x (m^3)
+  double volume() const { return v_cavity + v_cracks + v_plug; }
+  double gas_mass() const { return burnt - vented; }
+};
+
+// The gas bodies of one charge set (the bars, or the solid charges) and the gas in cracks.
+struct GasField {
+  std::vector<GasBody> bodies;
+  // filled by the charge model each step, per body: burnt charge volume (m^3) and its cavity (m^3)
+  std::vector<double> burnt_volume, cavity;
+  // per interface the crack's fill fraction and the body whose gas it holds (-1 none); per block
+  // the body whose gas reached it (-1 none), whether it has a boundary face; output: the crack
+  // faces' gas pressure (Pa)
+  std::vector<float> iface_fill, iface_gas_p;
+  std::vector<std::int32_t> iface_body, block_body;
+  std::vector<std::uint8_t> block_exterior;
+  std::vector<double> scratch;
+  bool any() const {
+    for (const auto& b : bodies)
+      if (b.model != GasModel::Literal) return true;
+    return false;
+  }
+};
+
+// Sizes the per-interface and per-block arrays of `g` for model m (bodies already added).
+void init_gas_field(const Model& m, GasField& g);
+
+// Seeds body k's gas in block b and, when `wall` is set, in b's face neighbours (the cavity's
+// wall when the charge fills b).
+void seed_gas(const Model& m, GasField& g, std::int32_t b, std::int32_t k, bool wall);
 
 // The choked mass flux per unit vent area (kg/(m^2 s)) of gas at pressure p and density rho with
 // isentropic exponent gamma.
@@ -44,10 +104,9 @@ double products_gamma(const Eos& eos, double v);
 bool advance_plug(double& x, double& v, double p, double a, double c, double length, double mass,
                   double shear, double dt);
 
-// Updates every deck with gas model cavity or cracks: burnt mass, volume, pressure, venting,
-// plug, the gas-filled cracks and their loads (added through `out`), and the segments' pressure
-// seg_p = xi P (the bound blocks are loaded by bar_loads from it). Segments' burnt fractions
-// seg_xi must be current. dt: the time since the last call (0 the first time).
-void update_deck_gas(Model& m, BarCharges& bc, AppliedLoads& out, double dt);
+// One step of every body whose model is cavity or cracks, from the burnt volume and cavity the
+// charge model has put in g.burnt_volume and g.cavity: mass, volume, pressure, venting, plug, the
+// gas-filled cracks and their loads (added through `out`). dt: the time since the last call.
+void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads& out, double dt);
 
 }  // namespace cdem

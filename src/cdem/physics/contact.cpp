@@ -568,8 +568,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const double vn_rel = dot(vrel, nrm);
     // The ignored penetration d0: set when the node comes inside, then only shrinking.
     double d0 = cs.pair_g0[p];
-    if (in_contact && cs.pair_in[p] == 2)  // a pair new at this build: an overlap it inherits
-      d0 = std::max(0.0, -g - 2.0 * std::abs(vn_rel) * dt);
+    // coming into contact now (not in contact at the last step): an overlap beyond what one
+    // step's approach explains is inherited (the node sank in while it was held by a broken
+    // point, or through faces that were not yet candidates), not pushed back at once
+    if (in_contact && cs.pair_kf[p] < 0) d0 = std::max(0.0, -g - 2.0 * std::abs(vn_rel) * dt);
     if (in_contact) d0 = std::min(d0, -g);
     if (!inside) d0 = 0;
     cs.pair_g0[p] = d0;

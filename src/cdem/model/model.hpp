@@ -141,6 +141,8 @@ struct Model {
   std::vector<std::int32_t> active_ifaces;    // capacity n_ifaces, reserved at set-up
   std::vector<std::uint8_t> block_active;     // 1: the block has an active interface (gather)
   std::vector<std::int32_t> vtx_scratch;      // set-up-sized work space of the cluster split
+  std::vector<double> tie_reject;             // per interface material: the stress norm (Pa)
+                                              // below which no tie can break (tie_failure.cpp)
   std::size_t n_vertices() const { return vtx_offset.empty() ? 0 : vtx_offset.size() - 1; }
 
   // ---- materials ----

@@ -49,6 +49,12 @@ void build_ties(Model& m) {
     }
   }
   if (m.sp_g0.empty()) m.sp_g0.assign(ns, 0.0);
+  // the quick reject of tie_failure: ||sigma||_F below min(f_t, c / (1 + tan phi)) breaks no tie
+  m.tie_reject.assign(m.spring_laws.size(), 0.0);
+  for (std::size_t k = 0; k < m.spring_laws.size(); ++k) {
+    const SpringLaw& l = m.spring_laws[k];
+    m.tie_reject[k] = l.law == InterfaceLaw::Elastic ? 1e300 : std::min(l.ft, l.c / (1.0 + l.tan_phi));
+  }
   for (std::size_t s = 0; s < ns; ++s)
     if (m.sp_tied[s]) m.sp_g0[s] = 0;
   // vertex -> nodes, ascending

@@ -612,7 +612,8 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
       const double v = signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
       const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
       sc.gas.burnt_volume[sc.charge[i]] += lam * sc.v0[i];
-      sc.gas.cavity[sc.charge[i]] += lam * std::max(v, 0.0) * sc.v0[i];
+      // a collapsed block has been let go with its products (booked as vented when it died)
+      if (!sc.dead[i]) sc.gas.cavity[sc.charge[i]] += lam * std::max(v, 0.0) * sc.v0[i];
     }
     update_gas(m, sc.gas, sc.eos, out, sc.t_last >= 0 ? t - sc.t_last : 0.0);
   }
@@ -629,6 +630,12 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
     if (!sc.dead[i] && !(v > sc.min_volume_ratio)) {
       sc.dead[i] = 1;
       ++sc.dead_count;
+      {  // its share of the deck's gas leaves with it
+        GasBody& gb = sc.gas.bodies[sc.charge[i]];
+        const double lam0 = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
+        const double total = gb.v0 > 0 ? gb.gas_mass() * sc.v0[i] / gb.v0 : 0.0;
+        if (gb.model != GasModel::Literal) gb.vented += std::min(total, lam0 * gb.rho_w * sc.v0[i]);
+      }
       spdlog::warn("t = {:.6g} s: explosive block {} (element {}) collapsed (volume ratio {:.3g}); "
                    "it stops carrying pressure and is let go of its neighbours",
                    t, b, m.block_elem_tag[b], v);

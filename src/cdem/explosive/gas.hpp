@@ -50,7 +50,8 @@ struct GasBody {
   double vent_cd = 1.0;
   // state
   double burnt = 0;            // burnt mass (kg)
-  double vented = 0;           // mass vented so far (kg)
+  double vented = 0;           // mass vented so far (kg), including the products of a solid
+                               // charge's collapsed blocks, which leave with them
   double v_cavity = 0;         // volume of the burnt charge's cavity (m^3)
   double v_cracks = 0;         // volume of the gas-filled cracks (m^3)
   double m_cracks = 0;         // gas mass in them (kg)

@@ -157,8 +157,8 @@ check_mesh missing_mesh_file no_such_mesh.msh 2 "cannot open mesh file" "No such
 expect run:missing_mesh_file 2 stderr no_such_mesh.msh -- "$BIN" run "$D/missing_mesh_file.toml" \
   --out "$TMP/run_nomesh" -q -- "cannot open mesh file" "No such file"
 check_mesh garbage_mesh garbage.msh 2 "mesh file" "line 1"
-check_mesh truncated_mesh truncated_2d.msh 2 "mesh file" "gmsh"
-check_mesh undefined_node undefined_node_2d.msh 2 "mesh file" "node index 9"
+check_mesh truncated_mesh truncated_2d.msh 2 "mesh file" "\$Nodes, line 17" "expected a node tag" "found '\$EndNodes'"
+check_mesh undefined_node undefined_node_2d.msh 2 "mesh file" "element 8" "line 28" "node 9 is not defined"
 check_mesh inverted_tet inverted_tet_3d.msh 2 "element 2" "inverted tetrahedron"
 check_mesh degenerate_triangle degenerate_triangle_2d.msh 2 "element 9" "degenerate element"
 check_mesh six_node_triangle six_node_triangle_2d.msh 2 "element 5" "Triangle 6" "Gmsh type 9" "linear elements only"

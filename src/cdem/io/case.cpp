@@ -8,8 +8,10 @@
 #include <sstream>
 
 #include "cdem/core/error.hpp"
-#include "cdem/io/toml_reader.hpp"
+#include "cdem/core/input_file.hpp"
 #include "cdem/explosive/explosive_library.hpp"
+#include "cdem/io/case_text.hpp"
+#include "cdem/io/toml_reader.hpp"
 
 namespace cdem {
 
@@ -30,6 +32,7 @@ namespace fs = std::filesystem;
 
 // Apply "a.b.c=value" on top of the parsed document; numeric components index arrays.
 void apply_override(toml::value& root, const std::string& ov, const std::string& file) {
+  check_override_text(ov);
   const auto eq = ov.find('=');
   if (eq == std::string::npos || eq == 0)
     throw InputError(fmt::format("--set '{}': expected key=value (e.g. simulation.end_time=1e-3)", ov));
@@ -51,13 +54,15 @@ void apply_override(toml::value& root, const std::string& ov, const std::string&
     const bool last = i + 1 == parts.size();
     const auto& p = parts[i];
     if (cur->is_array()) {
+      // An index is digits only: std::stoul would take "-1" as 18446744073709551615.
       std::size_t idx = 0;
-      try {
-        idx = std::stoul(p);
-      } catch (...) {
-        throw InputError(fmt::format("--set '{}': '{}' is an array in {}; index it with a number",
-                                     ov, parts[i - 1], file));
-      }
+      const bool digits = !p.empty() && p.size() <= 9 &&
+                          std::all_of(p.begin(), p.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+      if (!digits)
+        throw InputError(fmt::format("--set '{}': '{}' is an array in {}; '{}' is not an index (0, "
+                                     "1, 2, ...)",
+                                     ov, parts[i - 1], file, p));
+      idx = std::stoul(p);
       auto& arr = cur->as_array();
       if (idx >= arr.size())
         throw InputError(fmt::format("--set '{}': index {} out of range ({} has {} entries)", ov,
@@ -255,12 +260,23 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 }  // namespace
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
-  if (!fs::exists(path)) throw InputError(fmt::format("cannot open case file '{}': no such file", path));
-  if (fs::is_directory(path))
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw InputError(fmt::format("cannot open case file '{}': no such file", path));
+  if (fs::is_directory(path, ec))
     throw InputError(fmt::format("cannot open case file '{}': it is a directory", path));
+  const std::string text = read_input_file(path, "case file", kMaxCaseFileBytes);
+  return parse_case(text, path, overrides);
+}
+
+Case parse_case(std::string_view text, const std::string& path,
+                const std::vector<std::string>& overrides) {
+  // The text is checked before toml11 sees it (case_text.hpp).
+  check_case_text(text, path);
   toml::value root;
   try {
-    root = toml::parse(path);
+    std::istringstream is{std::string(text)};
+    root = toml::parse(is, path);
   } catch (const toml::syntax_error& e) {
     throw InputError(fmt::format("{}: TOML syntax error:\n{}", path, e.what()));
   } catch (const std::exception& e) {
@@ -303,8 +319,13 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
                                  "scheme is unstable)",
                                  sim->where("dt_safety"), c.dt_safety));
   c.fixed_dt = sim->non_negative("dt", 0.0);
-  c.threads = static_cast<int>(sim->integer("threads", 0));
-  if (c.threads < 0) throw InputError(fmt::format("{}: expected >= 0", sim->where("threads")));
+  {
+    const std::int64_t threads = sim->integer("threads", 0);
+    if (threads < 0 || threads > kMaxThreads)
+      throw InputError(fmt::format("{}: expected an integer from 0 (all cores) to {}, got {}",
+                                   sim->where("threads"), kMaxThreads, threads));
+    c.threads = static_cast<int>(threads);
+  }
   c.output_interval = sim->non_negative("output_interval", 0.0);
   if (sim->has("output_times")) c.output_times = sim->numbers("output_times");
   for (double t : c.output_times)

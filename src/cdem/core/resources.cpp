@@ -1,12 +1,14 @@
 #include "cdem/core/resources.hpp"
 
 #include <fmt/format.h>
-#include <omp.h>
+#include <sched.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 namespace cdem {
 namespace {
@@ -63,7 +65,13 @@ AvailableMemory available_memory() {
   return m;
 }
 
-int available_processors() { return omp_get_num_procs(); }
+int available_processors() {
+  // The processors this process may run on (its affinity mask), like omp_get_num_procs.
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 std::string format_bytes(double bytes) {
   if (bytes >= 1e12) return fmt::format("{:.3g} TB", bytes / 1e12);

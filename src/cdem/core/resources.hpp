@@ -17,7 +17,7 @@ struct AvailableMemory {
 // environment variable CDEM_MEMORY_AVAILABLE (bytes) replaces both (tests, batch systems).
 AvailableMemory available_memory();
 
-// Processors OpenMP may use here (omp_get_num_procs).
+// Processors this process may run on (its CPU affinity, as omp_get_num_procs counts them).
 int available_processors();
 
 // "1.2 GB", "340 MB": decimal units, for messages.

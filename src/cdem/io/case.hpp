@@ -121,6 +121,7 @@ struct Case {
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   std::int64_t max_steps = 0;           // 0: unlimited
+  bool allow_large_run = false;         // lifts the caps on steps, outputs, samples (run_limits.hpp)
 
   Vec3 gravity{};
   std::vector<BlockMaterial> materials;

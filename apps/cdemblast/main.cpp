@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <omp.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <sys/wait.h>
@@ -140,6 +141,9 @@ int main(int argc, char** argv) {
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;  // help and version: 0; any command-line error: 2, like input errors
   }
+  // Log lines (progress, warnings, a run stopped as unstable) go to stderr with the errors;
+  // stdout holds only what a command prints as its result (check's report).
+  spdlog::set_default_logger(spdlog::stderr_color_mt("cdemblast"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   try {
     if (*check) return cmd_check(case_path, sets);

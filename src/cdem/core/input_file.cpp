@@ -35,7 +35,8 @@ struct Fd {
 }  // namespace
 
 std::string read_input_file(const std::string& path, const std::string& what,
-                            std::uint64_t max_bytes) {
+                            std::uint64_t max_bytes, const std::string& limit_reason) {
+  const std::string why_limit = limit_reason.empty() ? "" : " (" + limit_reason + ")";
   auto fail = [&](const std::string& why) -> void {
     throw InputError(fmt::format("cannot open {} '{}': {}", what, path, why));
   };
@@ -51,8 +52,9 @@ std::string read_input_file(const std::string& path, const std::string& what,
   if (::fstat(f.fd, &st) != 0) fail(std::strerror(errno));
   if (!S_ISREG(st.st_mode)) fail(kind_of(st.st_mode));
   if (static_cast<std::uint64_t>(st.st_size) > max_bytes)
-    fail(fmt::format("it is {} long, more than the {} read at most", format_bytes(st.st_size),
-                     format_bytes(static_cast<double>(max_bytes))));
+    fail(fmt::format("it is {} long, more than the {} read at most{}",
+                     format_bytes(static_cast<double>(st.st_size)),
+                     format_bytes(static_cast<double>(max_bytes)), why_limit));
   // Back to blocking reads for a regular file (O_NONBLOCK has no effect on them anyway).
   std::string out;
   out.reserve(static_cast<std::size_t>(st.st_size));
@@ -65,18 +67,19 @@ std::string read_input_file(const std::string& path, const std::string& what,
     }
     if (n == 0) break;
     if (out.size() + static_cast<std::size_t>(n) > max_bytes)
-      fail(fmt::format("it holds more than the {} read at most",
-                       format_bytes(static_cast<double>(max_bytes))));
+      fail(fmt::format("it holds more than the {} read at most{}",
+                       format_bytes(static_cast<double>(max_bytes)), why_limit));
     out.append(buf, static_cast<std::size_t>(n));
   }
   return out;
 }
 
-std::uint64_t max_mesh_file_bytes() {
+FileLimit max_mesh_file_bytes() {
   constexpr std::uint64_t cap = std::uint64_t{16} << 30;
   const AvailableMemory mem = available_memory();
-  if (mem.bytes == 0) return cap;
-  return std::min(cap, mem.bytes / 4);
+  if (mem.bytes == 0 || mem.bytes / 4 >= cap) return {cap, "the largest mesh file cdemblast reads"};
+  return {mem.bytes / 4, fmt::format("a quarter of the {} of memory available, {}",
+                                     format_bytes(static_cast<double>(mem.bytes)), mem.source)};
 }
 
 }  // namespace cdem

@@ -13,6 +13,7 @@
 #include "cdem/explosive/explosive_library.hpp"
 #include "cdem/io/case_text.hpp"
 #include "cdem/io/toml_reader.hpp"
+#include "cdem/mesh/mesh_estimate.hpp"
 #include "cdem/io/run_limits.hpp"
 
 namespace cdem {
@@ -374,6 +375,13 @@ Case parse_case(std::string_view text, const std::string& path,
     c.mesh_file = resolve_path(c.dir, mesh->string("file"));
   } else {
     c.generate = parse_generate(*mesh->sub("generate"));
+    // Sized now, naming the key, before anything is meshed (generate_mesh checks again).
+    const MeshEstimate est = estimate_generated_mesh(*c.generate);
+    const std::string why = model_size_problem(
+        est.elements, c.generate->shape == "rectangle" ? 2 : 3, "mostly from " + est.largest);
+    if (!why.empty())
+      throw InputError(
+          fmt::format("{}: key 'mesh.generate.{}': {}", path, est.largest_key, why));
   }
 
   // ---- simulation ----

@@ -17,6 +17,7 @@ constexpr double kHoleToElement = 200;   // diameter / element size, either way
 constexpr double kHoleToExtent = 5e-5;   // diameter / model extent, at least
 constexpr double kLargestExtent = 2000;  // m: larger models are rare in rock blasting
 constexpr double kSmallestExtent = 5e-3;
+constexpr double kLargestElement = 50;  // m: a median element this large is a blast model in mm
 
 }  // namespace
 
@@ -96,9 +97,9 @@ void check_case_against_mesh(const Case& c, const Mesh& mesh) {
   const MeshScale s = mesh_scale(mesh);
   const std::string mesh_name =
       c.mesh_file.empty() ? "the generated mesh" : fmt::format("mesh file '{}'", c.mesh_file);
-  if (s.extent > kLargestExtent)
+  if (s.extent > kLargestExtent || s.element_size > kLargestElement)
     spdlog::warn(
-        "{}: the model is {:g} m across (median element {:g} m): is the mesh in "
+        "{}: the model is {:g} m across with a median element of {:g} m: is the mesh in "
         "millimetres? cdemblast works in metres",
         mesh_name, s.extent, s.element_size);
   if (s.extent > 0 && s.extent < kSmallestExtent)
@@ -106,9 +107,6 @@ void check_case_against_mesh(const Case& c, const Mesh& mesh) {
         "{}: the model is only {:g} m across: is the mesh in kilometres? cdemblast "
         "works in metres",
         mesh_name, s.extent);
-  if (s.element_size > 0 && s.element_size > 0.5 * s.extent)
-    spdlog::warn("{}: the median element ({:g} m) is more than half the model ({:g} m across)",
-                 mesh_name, s.element_size, s.extent);
   for (std::size_t i = 0; i < c.holes.size(); ++i) {
     const HoleDef& h = c.holes[i];
     const double d = h.diameter;

@@ -36,20 +36,22 @@ RunSize check_run_size(const Case& c, double dt, const std::string& dt_source) {
   RunSize r;
   const double steps = std::ceil(c.end_time / dt - 1e-9);
   const std::string dt_text = fmt::format("dt = {:.4g} s ({})", dt, dt_source);
+  // The keys that set the count: end_time, and dt when the case fixes it.
+  const std::string keys = c.fixed_dt > 0 ? "keys 'simulation.end_time' and 'simulation.dt'"
+                                          : "key 'simulation.end_time'";
   // Overflow first: a step count that is not a number the run loop can count exactly.
   if (!(steps <= kHardMaxSteps) && !(c.max_steps > 0))
     throw InputError(
-        fmt::format("{}: key 'simulation.end_time': {:g} s with {} is {:.3g} steps, "
-                    "more than a run can count (2^53); check end_time and dt",
-                    c.path, c.end_time, dt_text, steps));
+        fmt::format("{}: {}: end_time = {:g} s with {} is {:.3g} steps, more than a "
+                    "run can count (2^53); check end_time and dt",
+                    c.path, keys, c.end_time, dt_text, steps));
   r.steps =
       std::max(1.0, c.max_steps > 0 ? std::min(steps, static_cast<double>(c.max_steps)) : steps);
   if (r.steps > kMaxSteps && !c.allow_large_run)
     throw InputError(fmt::format(
-        "{}: key 'simulation.end_time': {:g} s with {} is {:.3g} steps, more than the {:.0e} a "
-        "run may take; shorten end_time, coarsen the mesh, cap it with simulation.max_steps, or "
-        "{}",
-        c.path, c.end_time, dt_text, r.steps, kMaxSteps, kLift));
+        "{}: {}: end_time = {:g} s with {} is {:.3g} steps, more than the {:.0e} a run may take; "
+        "shorten end_time, coarsen the mesh, cap it with simulation.max_steps, or {}",
+        c.path, keys, c.end_time, dt_text, r.steps, kMaxSteps, kLift));
   if (r.steps > kHardMaxSteps)
     throw InputError(
         fmt::format("{}: key 'simulation.max_steps': {} steps are more than a run "

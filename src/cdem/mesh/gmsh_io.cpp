@@ -197,7 +197,8 @@ Mesh read_gmsh(const std::string& path) {
   const std::string source = fmt::format("mesh file '{}'", path);
   std::string bytes;
   try {
-    bytes = read_input_file(path, "mesh file", max_mesh_file_bytes());
+    const FileLimit limit = max_mesh_file_bytes();
+    bytes = read_input_file(path, "mesh file", limit.bytes, limit.reason);
   } catch (const MeshError&) {
     throw;
   } catch (const InputError& e) {

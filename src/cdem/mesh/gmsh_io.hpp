@@ -57,7 +57,8 @@ class GmshSession {
 //   negative tetrahedron usually means a broken mesh, not a convention);
 // - every vertex coordinate finite; before the degenerate test, an element whose |area| or
 //   |volume| is more than 1e9 times the median element's is reported as such (a misplaced
-//   vertex would otherwise inflate the mean and have a sound element called degenerate).
+//   vertex would otherwise inflate the mean and have a sound element called degenerate);
+//   beyond 1e6 times it is a warning.
 // read_gmsh and generate_mesh run it on every mesh they return.
 void check_mesh(Mesh& mesh, const std::string& source);
 

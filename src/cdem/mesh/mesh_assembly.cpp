@@ -45,6 +45,13 @@ Mesh assemble_mesh(const RawModel& raw, const std::string& source) {
     return fmt::format(" ({})", raw.locate(offsets[i]));
   };
 
+  // " (at A and at B)" for two items whose offsets are known.
+  auto both = [&](const std::vector<std::uint64_t>& oa, std::size_t a,
+                  const std::vector<std::uint64_t>& ob, std::size_t b) -> std::string {
+    if (!raw.locate || a >= oa.size() || b >= ob.size()) return "";
+    return fmt::format(" (at {} and at {})", raw.locate(oa[a]), raw.locate(ob[b]));
+  };
+
   // Structure of the blocks (a RawModel from the reader is consistent; this guards the rules
   // below against any other producer).
   int top = -1;
@@ -145,9 +152,10 @@ Mesh assemble_mesh(const RawModel& raw, const std::string& source) {
                    [](const Elem& a, const Elem& b) { return a.tag < b.tag; });
   for (std::size_t i = 1; i < elems.size(); ++i)
     if (elems[i].tag == elems[i - 1].tag)
-      fail(fmt::format("element tag {} is used twice{}{} (element tags must be unique)",
-                       elems[i].tag, at(elems[i - 1].block->offsets, elems[i - 1].index),
-                       at(elems[i].block->offsets, elems[i].index)));
+      fail(fmt::format("element tag {} is used twice{} (element tags must be unique)",
+                       elems[i].tag,
+                       both(elems[i - 1].block->offsets, elems[i - 1].index,
+                            elems[i].block->offsets, elems[i].index)));
   if (elems.size() > static_cast<std::size_t>(INT32_MAX))
     fail(fmt::format("{} elements are more than cdemblast can index", elems.size()));
 
@@ -168,9 +176,9 @@ Mesh assemble_mesh(const RawModel& raw, const std::string& source) {
   });
   for (std::size_t i = 1; i < by_tag.size(); ++i)
     if (raw.node_tags[by_tag[i]] == raw.node_tags[by_tag[i - 1]])
-      fail(fmt::format("node tag {} is defined twice{}{} (node tags must be unique)",
-                       raw.node_tags[by_tag[i]], at(raw.node_offsets, by_tag[i - 1]),
-                       at(raw.node_offsets, by_tag[i])));
+      fail(fmt::format("node tag {} is defined twice{} (node tags must be unique)",
+                       raw.node_tags[by_tag[i]],
+                       both(raw.node_offsets, by_tag[i - 1], raw.node_offsets, by_tag[i])));
   // Index of the node with this tag, or SIZE_MAX.
   auto find_node = [&](std::uint64_t tag) -> std::size_t {
     auto it =

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <vector>
 
 #include "cdem/core/error.hpp"
 #include "cdem/core/input_file.hpp"
@@ -11,41 +12,96 @@
 namespace cdem {
 namespace {
 
-// The deepest nesting of [ ] and { } outside strings and comments, and where it passes `limit`
-// (npos if never). Table headers ([a], [[a]]) count like arrays; that is within the limit.
-std::size_t nesting_over(std::string_view s, int limit) {
-  int depth = 0;
+struct Structure {
+  std::size_t offset = std::string_view::npos;  // where a limit is passed (npos: never)
+  std::string what;
+};
+
+// The structure of TOML text, outside strings and comments: nesting of arrays and inline tables
+// (values), and the parts of each dotted key (a key before '=', a table header, a key inside an
+// inline table). toml11 recurses once per level of either, and a dotted key of 100 000 parts
+// overflows the stack. Conservative: it only has to find where a limit is passed.
+Structure scan_structure(std::string_view s, int max_depth, int max_parts) {
   const std::size_t n = s.size();
-  std::size_t i = 0;
+  std::vector<char> open;  // '[' (array) or '{' (inline table) of the values being read
+  bool key = true;         // reading a key (line start at top level, or inside an inline table)
+  bool header = false;     // reading a table header [a.b] or [[a.b]]
+  bool blank = true;       // only whitespace so far on this line
+  int parts = 1;
   auto starts = [&](std::size_t at, std::string_view what) {
     return s.substr(at, what.size()) == what;
   };
+  auto new_key = [&] {
+    key = true;
+    parts = 1;
+  };
+  std::size_t i = 0;
   while (i < n) {
     const char c = s[i];
     if (c == '#') {
       while (i < n && s[i] != '\n') ++i;
-    } else if (c == '"' || c == '\'') {
+      continue;
+    }
+    if (c == '\n') {
+      if (open.empty()) {
+        new_key();
+        header = false;
+      }
+      blank = true;
+      ++i;
+      continue;
+    }
+    if (c == ' ' || c == '\t' || c == '\r') {
+      ++i;
+      continue;
+    }
+    const bool at_line_start = blank;
+    blank = false;
+    if (c == '"' || c == '\'') {  // a string (or a quoted key part): skipped whole
       const bool basic = c == '"';
       const std::string_view triple = basic ? "\"\"\"" : "'''";
-      if (starts(i, triple)) {  // multi-line string: up to the closing triple quote
+      if (starts(i, triple)) {
         i += 3;
         while (i < n && !starts(i, triple)) i += basic && s[i] == '\\' ? 2 : 1;
         i += 3;
-        while (i < n && s[i] == c) ++i;  // up to two quotes may close the content
-      } else {                           // one-line string: up to the quote or the line's end
+        while (i < n && s[i] == c) ++i;
+      } else {
         ++i;
         while (i < n && s[i] != c && s[i] != '\n') i += basic && s[i] == '\\' ? 2 : 1;
         ++i;
       }
       continue;
-    } else if (c == '[' || c == '{') {
-      if (++depth > limit) return i;
+    }
+    if (key || header) {
+      if (c == '.' && ++parts > max_parts)
+        return {i, fmt::format("a dotted key of more than {} parts", max_parts)};
+      if (header && c == ']') {
+        header = key = false;
+      } else if (!header && c == '=') {
+        key = false;
+      } else if (key && !header && c == '[' && at_line_start && open.empty()) {
+        header = true;
+        parts = 1;
+      } else if (key && c == '}' && !open.empty()) {  // an empty inline table {}
+        open.pop_back();
+        key = false;
+      }
+      ++i;
+      continue;
+    }
+    if (c == '[' || c == '{') {
+      open.push_back(c);
+      if (static_cast<int>(open.size()) > max_depth)
+        return {i, fmt::format("arrays or inline tables nested more than {} deep", max_depth)};
+      if (c == '{') new_key();
     } else if (c == ']' || c == '}') {
-      depth = std::max(0, depth - 1);
+      if (!open.empty()) open.pop_back();
+    } else if (c == ',' && !open.empty() && open.back() == '{') {
+      new_key();
     }
     ++i;
   }
-  return std::string_view::npos;
+  return {};
 }
 
 }  // namespace
@@ -60,8 +116,9 @@ void check_case_text(std::string_view text, const std::string& name) {
                                  text.size(), kMaxCaseFileBytes));
   if (const auto bad = check_text(text, true))
     fail(bad->offset, fmt::format("{} (a case file is UTF-8 text)", bad->what));
-  if (const std::size_t at = nesting_over(text, kMaxTomlNesting); at != std::string_view::npos)
-    fail(at, fmt::format("arrays or inline tables nested more than {} deep", kMaxTomlNesting));
+  if (const Structure st = scan_structure(text, kMaxTomlNesting, kMaxKeyParts);
+      st.offset != std::string_view::npos)
+    fail(st.offset, st.what);
 }
 
 void check_override_text(std::string_view text) {
@@ -74,9 +131,17 @@ void check_override_text(std::string_view text) {
         fmt::format("--set '{}': {} at byte {} (an override is one line of UTF-8 "
                     "text)",
                     shown, bad->what, bad->offset + 1));
-  if (nesting_over(text, kMaxTomlNesting) != std::string_view::npos)
-    throw InputError(fmt::format("--set '{}': arrays or inline tables nested more than {} deep",
-                                 shown, kMaxTomlNesting));
+  // The value is parsed as "v = <value>"; the key path is split on dots (at most kMaxKeyParts).
+  const std::size_t eq = text.find('=');
+  const std::string_view value = eq == std::string_view::npos ? "" : text.substr(eq + 1);
+  if (const Structure st =
+          scan_structure(std::string("v = ") + std::string(value), kMaxTomlNesting, kMaxKeyParts);
+      st.offset != std::string_view::npos)
+    throw InputError(fmt::format("--set '{}': {}", shown, st.what));
+  const std::string_view key = text.substr(0, eq == std::string_view::npos ? text.size() : eq);
+  if (std::count(key.begin(), key.end(), '.') >= kMaxKeyParts)
+    throw InputError(
+        fmt::format("--set '{}': a key path of more than {} parts", shown, kMaxKeyParts));
 }
 
 }  // namespace cdem

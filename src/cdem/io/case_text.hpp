@@ -1,8 +1,9 @@
 // Checks of a case file's text before the TOML parser sees it (toml11 3.7.1 reads past the end
 // of its buffer on invalid UTF-8 in a quoted key, and recurses once per nesting level):
 // valid UTF-8, no NUL bytes or other control characters than tab, line feed and carriage return
-// (TOML allows no others), at most kMaxCaseFileBytes, and at most kMaxTomlNesting levels of
-// nested arrays and inline tables.
+// (TOML allows no others), at most kMaxCaseFileBytes, at most kMaxTomlNesting levels of nested
+// arrays and inline tables, and dotted keys (keys, table headers, keys of inline tables) of at
+// most kMaxKeyParts parts (each part is a level of nested tables in toml11).
 #pragma once
 #include <cstddef>
 #include <string>
@@ -11,6 +12,7 @@
 namespace cdem {
 
 inline constexpr int kMaxTomlNesting = 16;
+inline constexpr int kMaxKeyParts = 64;
 
 // Throws InputError "<name>: line L, column C: <problem>" for the first problem of `text`.
 void check_case_text(std::string_view text, const std::string& name);

@@ -163,9 +163,11 @@ class Parser {
     if (seen) fail_at(start, false, fmt::format("a second {} section", printable(section_)));
     seen = true;
   }
-  std::uint64_t position(Section s) const {
-    return binary_ ? (kBinaryBit | (std::uint64_t{s} << kSectionShift) | pos_)
-                   : ((std::uint64_t{s} << kSectionShift) | line_);
+  // Where the next node or element starts (in text, after the whitespace before it).
+  std::uint64_t position(Section s) {
+    if (binary_) return kBinaryBit | (std::uint64_t{s} << kSectionShift) | pos_;
+    skip_space();
+    return (std::uint64_t{s} << kSectionShift) | line_;
   }
 
   // ---- text ----
@@ -545,6 +547,7 @@ class Parser {
           tags.push_back(tag("a node tag"));
         }
         for (std::uint64_t i = 0; i < count; ++i) {
+          if (!binary_) skip_space();
           const std::size_t cstart = pos_;
           double xyz[3];
           for (double& c : xyz) c = f64("a node coordinate");

@@ -212,6 +212,11 @@ expect node_far 0 stderr node_far_2d.msh -- "$BIN" check "$D/node_far.toml" -- \
   "element 6 (triangle): area 2.5e+06 m^2 is 1e+07 times the median element's" "a misplaced vertex?" "(1e+07, 1, 0)"
 check_mesh duplicate_node duplicate_node_2d.msh 2 "node tag 4 is defined twice" "\$Nodes, line 17" "\$Nodes, line 18"
 check_mesh hexahedra hexahedra_3d.msh 2 "element 2" "'Hexahedron 8' (Gmsh type 5)" "linear elements only"
+# Files that crash libgmsh 4.8's reader (tests/fuzz/regressions/msh): refused with a message.
+for m in "$ROOT"/tests/fuzz/regressions/msh/*.msh; do
+  n=$(basename "$m" .msh)
+  expect "$n" 2 stderr "$n.msh" -- "$BIN" check "$D/good_2d.toml" --set "mesh.file=\"$m\"" -- "error: mesh file"
+done
 # Case text is checked before the TOML parser (toml11 3.7.1 overflows on this one).
 check invalid_utf8_key 2 "line 2, column 4" "invalid UTF-8 (byte 0xff)"
 check nul_byte 2 "line 2, column 13" "a NUL byte"

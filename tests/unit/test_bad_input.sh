@@ -247,6 +247,8 @@ expect run:threads_beyond_machine 0 stderr threads_beyond_machine.toml -- "$BIN"
 expect delay_after_end 0 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" -- \
   "key 'hole[0].charge[0].delay'" "fires at 0.0002 s" "never fires"
 check holes_coincident 2 "key 'hole[1].collar'" "hole 'h2' lies on hole 'h1'"
+expect hole_far_away 2 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" --set 'hole.0.collar=[0.5, 1e300]' -- \
+  "key 'hole[0].collar'" "is 1e+300 m outside the model, which is 1 m across"
 check monitor_z_in_2d 2 "key 'monitor[0].point'" "z = 0.3 in a 2D case"
 check stress_yz_in_2d 2 "key 'initial_stress.stress'" "yz component 200000 in a 2D case"
 expect mesh_in_mm 0 stderr square_2d_mm.msh -- "$BIN" check "$D/mesh_in_mm.toml" -- \

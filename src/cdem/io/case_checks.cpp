@@ -31,6 +31,8 @@ MeshScale mesh_scale(const Mesh& mesh) {
       hi[i] = std::max(hi[i], p[i]);
     }
   s.extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  s.lo = lo;
+  s.hi = hi;
   std::vector<double> sizes;
   sizes.reserve(mesh.num_elements());
   for (std::size_t e = 0; e < mesh.num_elements(); ++e) {
@@ -93,8 +95,22 @@ void check_case_against_mesh(const Case& c, const Mesh& mesh) {
     }
   }
 
-  // Sizes that look like a unit mistake: warnings, the run may still be meant.
+  // Holes in the model's neighbourhood: a collar or bottom more than one model size outside its
+  // bounding box is no blasthole of this model (a typo or a unit mistake; far-away points
+  // would also overflow the stations of the funnel analysis along the hole).
   const MeshScale s = mesh_scale(mesh);
+  for (std::size_t i = 0; i < c.holes.size(); ++i) {
+    const HoleDef& h = c.holes[i];
+    for (const auto& [key, p] : {std::pair{"collar", h.collar}, std::pair{"end", h.end}}) {
+      double out = 0;  // distance outside the bounding box
+      for (int k = 0; k < mesh.dim; ++k) out = std::max({out, s.lo[k] - p[k], p[k] - s.hi[k]});
+      if (!(out <= s.extent))
+        throw InputError(
+            fmt::format("{}: key 'hole[{}].{}': hole '{}' at ({:g}, {:g}, {:g}) is {:g} "
+                        "m outside the model, which is {:g} m across",
+                        f, i, key, h.name, p.x, p.y, p.z, out, s.extent));
+    }
+  }
   const std::string mesh_name =
       c.mesh_file.empty() ? "the generated mesh" : fmt::format("mesh file '{}'", c.mesh_file);
   if (s.extent > kLargestExtent || s.element_size > kLargestElement)

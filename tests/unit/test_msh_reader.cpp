@@ -176,6 +176,14 @@ TEST(MshReader, SkipsOtherSectionsAndReadsParametricNodes) {
   EXPECT_EQ(m.region_names, (std::vector<std::string>{"1"}));
 }
 
+// Numbers as C's scanf (hence Gmsh) reads them: a leading '+' is accepted.
+TEST(MshReader, LeadingPlusSigns) {
+  const Mesh m =
+      read_msh(square_v22("5\n+1 +0 0 0\n2 1.0e+00 0 0\n3 +1 +1 0\n4 0 1 0\n5 0.5 0.5 0\n"), "m");
+  EXPECT_EQ(m.num_elements(), 4u);
+  EXPECT_NE(error_of(square_v22("5\n1 +-1 0 0\n")).find("found '+-1'"), std::string::npos);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Refusals: the file, the section and the line or byte.
 

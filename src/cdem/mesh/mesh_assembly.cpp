@@ -152,8 +152,7 @@ Mesh assemble_mesh(const RawModel& raw, const std::string& source) {
                    [](const Elem& a, const Elem& b) { return a.tag < b.tag; });
   for (std::size_t i = 1; i < elems.size(); ++i)
     if (elems[i].tag == elems[i - 1].tag)
-      fail(fmt::format("element tag {} is used twice{} (element tags must be unique)",
-                       elems[i].tag,
+      fail(fmt::format("element tag {} is used twice{} (element tags must be unique)", elems[i].tag,
                        both(elems[i - 1].block->offsets, elems[i - 1].index,
                             elems[i].block->offsets, elems[i].index)));
   if (elems.size() > static_cast<std::size_t>(INT32_MAX))
@@ -200,6 +199,8 @@ Mesh assemble_mesh(const RawModel& raw, const std::string& source) {
     }
   std::sort(used.begin(), used.end());
   used.erase(std::unique(used.begin(), used.end()), used.end());
+  if (used.size() > static_cast<std::size_t>(INT32_MAX))
+    fail(fmt::format("{} vertices are more than cdemblast can index", used.size()));
   std::unordered_map<std::uint64_t, std::int32_t> vertex_of;
   vertex_of.reserve(used.size());
   mesh.vertices.resize(used.size());

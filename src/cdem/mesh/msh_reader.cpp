@@ -201,6 +201,11 @@ class Parser {
     if (s.size() > 64) s = s.substr(0, 64);
     return std::string(s);
   }
+  // A number without a leading '+' (which C's scanf, hence Gmsh, accepts and from_chars not).
+  static std::string_view unsigned_part(std::string_view t) {
+    if (t.size() > 1 && t[0] == '+' && t[1] != '-' && t[1] != '+') t.remove_prefix(1);
+    return t;
+  }
   // The next whitespace-separated token; `what` says what was expected (for messages).
   std::string_view token(const char* what) {
     skip_space();
@@ -213,9 +218,10 @@ class Parser {
   T integer_token(const char* what) {
     const std::size_t before = pos_;
     const std::string_view t = token(what);
+    const std::string_view digits = unsigned_part(t);
     T v{};
-    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (ec != std::errc() || end != t.data() + t.size()) {
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ec != std::errc() || end != digits.data() + digits.size()) {
       pos_ = before;
       skip_space();
       fail_here(fmt::format("expected {} ({}), found '{}'", what,
@@ -226,9 +232,10 @@ class Parser {
   double double_token(const char* what) {
     const std::size_t before = pos_;
     const std::string_view t = token(what);
+    const std::string_view digits = unsigned_part(t);
     double v = 0;
-    const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (ec != std::errc() || end != t.data() + t.size()) {
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ec != std::errc() || end != digits.data() + digits.size()) {
       pos_ = before;
       skip_space();
       fail_here(fmt::format("expected {} (a number), found '{}'", what, printable(t)));

@@ -235,6 +235,8 @@ expect mesh_model_memory_guard 2 stderr square_2d.msh -- env CDEM_MEMORY_AVAILAB
 check output_interval_tiny 2 "key 'simulation.output_interval'" "1e+11 field outputs" "allow_large_run"
 check dt_tiny 2 "'simulation.dt'" "1e+26 steps" "more than a run can count"
 run dt_tiny 2 "'simulation.dt'" "1e+26 steps"
+expect run:history_interval_tiny 0 stdout "" -- bash -c "'$BIN' run '$D/good_2d.toml' --out '$TMP/run_hist' -q \
+  --set simulation.history_interval=1e-30 && echo finished" -- "finished"
 check end_time_huge 2 "key 'simulation.end_time'" "5.26e+14 steps" "more than the 1e+08" "allow_large_run"
 # NaN anywhere.
 check gravity_nan 2 "key 'simulation.gravity'" "entry 1 is nan"

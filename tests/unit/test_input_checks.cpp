@@ -142,6 +142,15 @@ TEST(CaseValues, PhysicalRanges) {
   spdlog::set_level(level);
 }
 
+TEST(CaseValues, MonitorCap) {
+  std::string many = kCase;
+  for (int i = 0; i <= 10000; ++i)
+    many += "[[monitor]]\nname = \"m" + std::to_string(i) + "\"\npoint = [0.5, 0.5]\n";
+  EXPECT_NE(case_error(many).find("10001 [[monitor]] entries, more than the 10000 allowed"),
+            std::string::npos);
+  EXPECT_EQ(case_error(many, {"simulation.allow_large_run=true"}), "");
+}
+
 TEST(CaseValues, CoincidentHoles) {
   const std::string hole =
       "[[hole]]\nname = \"%\"\ncollar = [0.5, 1.0]\nend = [0.5, 0.5]\ndiameter = 0.05\n"

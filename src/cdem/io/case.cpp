@@ -12,9 +12,9 @@
 #include "cdem/core/input_file.hpp"
 #include "cdem/explosive/explosive_library.hpp"
 #include "cdem/io/case_text.hpp"
+#include "cdem/io/run_limits.hpp"
 #include "cdem/io/toml_reader.hpp"
 #include "cdem/mesh/mesh_estimate.hpp"
-#include "cdem/io/run_limits.hpp"
 
 namespace cdem {
 
@@ -542,6 +542,11 @@ Case parse_case(std::string_view text, const std::string& path,
       if (o.name == mo.name) throw InputError(fmt::format("{}: duplicate monitor name '{}'", t.where("name"), mo.name));
     c.monitors.push_back(mo);
   }
+  // Each monitor is located by a search over the blocks and samples a row per history sample.
+  if (c.monitors.size() > kMaxMonitors && !c.allow_large_run)
+    throw InputError(fmt::format("{}: {} [[monitor]] entries, more than the {} allowed; set "
+                                 "simulation.allow_large_run = true if they are meant",
+                                 path, c.monitors.size(), kMaxMonitors));
   if (const auto is = top.sub("initial_stress")) {
     is->check_known({"stress", "gradient", "reference_level"});
     c.initial_stress.enabled = true;

@@ -3,6 +3,7 @@
 // names the keys that set the number; `simulation.allow_large_run = true` lifts the caps, not the
 // limits beyond which the numbers overflow (steps past 2^53, field outputs past 1e6).
 #pragma once
+#include <cstddef>
 #include <string>
 
 #include "cdem/io/case.hpp"
@@ -12,6 +13,7 @@ namespace cdem {
 inline constexpr double kMaxSteps = 1e8;                     // without allow_large_run
 inline constexpr double kMaxFieldOutputs = 1e4;              // without allow_large_run
 inline constexpr double kMaxHistorySamples = 1e7;            // without allow_large_run
+inline constexpr std::size_t kMaxMonitors = 10000;           // without allow_large_run
 inline constexpr double kHardMaxSteps = 9007199254740992.0;  // 2^53: t = k dt stays exact
 inline constexpr double kHardMaxFieldOutputs = 1e6;
 

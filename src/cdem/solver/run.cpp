@@ -109,6 +109,7 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
 void diagnose_time_step(const Model& m, const Case& c) {
   const StableStep st = stable_time_step(m, c.dt_safety);
   if (st.dt > 0 && std::isfinite(st.dt)) return;
+  if (c.fixed_dt > 0 && std::isinf(st.dt)) return;  // nothing limits dt: the fixed one is used
   auto material = [&](std::size_t b) -> const BlockMaterial& {
     return m.block_materials[m.block_material[b]];
   };
@@ -223,7 +224,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     sim.step(hist);
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
     if (hist) {
-      while (next_hist <= t_state + 0.5 * dt) next_hist += c.history_interval > 0 ? c.history_interval : dt;
+      // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
+      while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
       last = sim.energy();
       out.write_history(m, t_state, last, monitors);
       if (charges_csv) write_charge_rows(charges_csv, t_state, bars, solids);

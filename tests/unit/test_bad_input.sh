@@ -249,6 +249,8 @@ expect run:threads_beyond_machine 0 stderr threads_beyond_machine.toml -- "$BIN"
 expect delay_after_end 0 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" -- \
   "key 'hole[0].charge[0].delay'" "fires at 0.0002 s" "never fires"
 check holes_coincident 2 "key 'hole[1].collar'" "hole 'h2' lies on hole 'h1'"
+expect hole_wider_than_model 2 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" --set 'hole.0.diameter=1e300' -- \
+  "key 'hole[0].diameter'" "wider than the model (1 m across)"
 expect hole_far_away 2 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" --set 'hole.0.collar=[0.5, 1e300]' -- \
   "key 'hole[0].collar'" "is 1e+300 m outside the model, which is 1 m across"
 check monitor_z_in_2d 2 "key 'monitor[0].point'" "z = 0.3 in a 2D case"
@@ -263,6 +265,8 @@ expect set_negative_index 2 stderr "" -- "$BIN" check "$D/good_2d.toml" --set ma
 check main_faces_typo 2 "key 'analysis.main_faces'" "no face set 'bottm'"
 expect run:unstable_quiet 3 stderr "" -- "$BIN" run "$D/unstable_run.toml" --out "$TMP/run_unstable" -q -- \
   "run stopped: at t = 0 s (step 1): energy blow-up"
+expect run:pressure_overflow 3 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_overflow" -q \
+  --set boundary.1.pressure=1e300 -- "run stopped" "the state is not finite (NaN or Inf)"
 expect cli_unknown_option 2 stderr "" -- "$BIN" check "$D/good_2d.toml" --no-such-option -- "--no-such-option"
 
 wait

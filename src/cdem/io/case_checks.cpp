@@ -101,6 +101,11 @@ void check_case_against_mesh(const Case& c, const Mesh& mesh) {
   const MeshScale s = mesh_scale(mesh);
   for (std::size_t i = 0; i < c.holes.size(); ++i) {
     const HoleDef& h = c.holes[i];
+    if (!(h.diameter <= s.extent))
+      throw InputError(
+          fmt::format("{}: key 'hole[{}].diameter': hole '{}' is {:g} m wide, wider "
+                      "than the model ({:g} m across)",
+                      f, i, h.name, h.diameter, s.extent));
     for (const auto& [key, p] : {std::pair{"collar", h.collar}, std::pair{"end", h.end}}) {
       double out = 0;  // distance outside the bounding box
       for (int k = 0; k < mesh.dim; ++k) out = std::max({out, s.lo[k] - p[k], p[k] - s.hi[k]});

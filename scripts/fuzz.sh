@@ -3,9 +3,10 @@
 # `make fuzz` into build-fuzz/), then replay every kept crash regression through both.
 #   scripts/fuzz.sh [-b BUILD] [-t SECONDS] [-o LOGDIR] [case|msh]...
 # -t: seconds per target (default 45: the CI smoke run); -o: where logs and any crashing
-# inputs go (default: a temporary directory, removed unless something was found). The
-# corpora in tests/fuzz are copied first: a run never writes into the source tree (add new
-# crashers to tests/fuzz/regressions by hand, with a test that names them).
+# inputs go (default: a temporary directory, removed unless something was found). The seed
+# corpora in tests/fuzz (and the minimised corpus of the last campaign,
+# corpus_<target>_campaign.tar.gz) are copied first: a run never writes into the source tree
+# (add new crashers to tests/fuzz/regressions by hand, with a test that names them).
 # Exit status 1 when a target crashed, hung, ran out of memory or reported a sanitizer error.
 set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -36,6 +37,9 @@ for t in "${targets[@]}"; do
   work=$LOGDIR/work_$t
   mkdir -p "$work" "$LOGDIR/crashes_$t"
   cp "$ROOT"/tests/fuzz/corpus_"$t"/* "$work"/
+  # The minimised corpus of the last campaign (docs/input_safety.md), when there is one.
+  archive=$ROOT/tests/fuzz/corpus_${t}_campaign.tar.gz
+  [[ -f $archive ]] && tar -C "$work" -xzf "$archive"
   dict=$ROOT/tests/fuzz/$([[ $t == case ]] && echo toml || echo msh).dict
   echo "fuzz.sh: $t for $SECONDS_EACH s (log $LOGDIR/fuzz_$t.log)"
   "$bin" "$work" -dict="$dict" -max_total_time="$SECONDS_EACH" -timeout=10 -rss_limit_mb=2048 \

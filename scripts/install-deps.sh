@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Install the Debian packages cdemblast needs. Idempotent: does nothing when all are present.
+# Install the Debian packages cdemblast needs (clang and its runtimes: the libFuzzer targets of
+# make fuzz). Idempotent: does nothing when all are present.
 # Must run as root (or with sudo available) on a Debian 12 machine.
 set -euo pipefail
 PKGS=(
@@ -7,6 +8,7 @@ PKGS=(
   libgmsh-dev libeigen3-dev libtoml11-dev libcli11-dev libspdlog-dev libfmt-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
+  clang libclang-rt-14-dev
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <omp.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <sys/wait.h>
@@ -82,7 +83,12 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   for (const auto& ch : solids.charges)
     fmt::print("solid       hole '{}' deck {}\n", ch.hole, ch.deck + 1);
   if (!solids.empty()) fmt::print("explosive   {} blocks\n", solids.block.size());
-  fmt::print("steps       {} to reach {} s\n", static_cast<long long>(std::ceil(c.end_time / sim.dt())), c.end_time);
+  fmt::print("steps       {:.0f} to reach {} s{}\n", pc.size.steps, c.end_time,
+             c.max_steps > 0 && pc.size.steps < std::ceil(c.end_time / sim.dt() - 1e-9)
+                 ? " (stopped earlier by simulation.max_steps)"
+                 : "");
+  fmt::print("outputs     {:.0f} field outputs, {:.0f} history samples\n", pc.size.field_outputs,
+             pc.size.history_samples);
   fmt::print("check       OK\n");
   return 0;
 }
@@ -151,7 +157,7 @@ int main(int argc, char** argv) {
   run->add_option("case", case_path, "Case file (TOML)")->required();
   run->add_option("--out,-o", out_dir, "Output directory (default: runs/<case name>)");
   run->add_option("--threads,-t", threads, "OpenMP threads (default: the case's, else all cores)")
-      ->check(CLI::Range(0, 4096).description("an integer >= 0"));
+      ->check(CLI::Range(0, cdem::kMaxThreads).description("an integer from 0 to 4096"));
   run->add_option("--set", sets, "Override a case key: --set simulation.end_time=1e-3")
       ->allow_extra_args(false);
   run->add_flag("--quiet,-q", quiet, "No progress output");
@@ -179,9 +185,10 @@ int main(int argc, char** argv) {
   cdem::BenchOptions bench_opt;
   auto* bench = app.add_subcommand("bench", "Time the step on a 3D tet model: throughput, kernel split, memory, scaling");
   bench->add_option("--blocks", bench_opt.blocks, "Approximate number of blocks (default 30000)")
-      ->check(CLI::PositiveNumber);
-  bench->add_option("--steps", bench_opt.steps, "Timed steps (default 200)")->check(CLI::PositiveNumber);
-  bench->add_option("--threads", bench_opt.threads, "Threads (default: OMP_NUM_THREADS, else all cores)")->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(1, 100000000));
+  bench->add_option("--steps", bench_opt.steps, "Timed steps (default 200)")->check(CLI::Range(1, 100000000));
+  bench->add_option("--threads", bench_opt.threads, "Threads (default: OMP_NUM_THREADS, else all cores)")
+      ->check(CLI::Range(0, cdem::kMaxThreads));
   bench->add_option("--warmup-broken", bench_opt.warmup_broken,
                     "Warm up until this fraction of the spring points is broken (default 0.005; "
                     "larger: a later, more cracked state)")
@@ -194,6 +201,9 @@ int main(int argc, char** argv) {
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;  // help and version: 0; any command-line error: 2, like input errors
   }
+  // Log lines (progress, warnings, a run stopped as unstable) go to stderr with the errors;
+  // stdout holds only what a command prints as its result (check's report).
+  spdlog::set_default_logger(spdlog::stderr_color_mt("cdemblast"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   try {
     if (*check) return cmd_check(case_path, sets);

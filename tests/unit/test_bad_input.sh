@@ -61,7 +61,7 @@ _expect() {
   elif [[ $rc -ne $code ]]; then
     why+=("exit code $rc, expected $code")
   fi
-  if grep -qE 'Segmentation|terminate called|Aborted|core dumped|munmap_chunk|double free' "$out" "$err"; then
+  if grep -qE 'Segmentation|terminate called|Aborted|core dumped|munmap_chunk|double free|Sanitizer|runtime error:' "$out" "$err"; then
     crash="${crash:-crashed} (crash message in the output)"
   fi
   # A crash or a hang is a failure even in a case marked XFAIL (those marks are about messages).
@@ -157,8 +157,8 @@ check_mesh missing_mesh_file no_such_mesh.msh 2 "cannot open mesh file" "No such
 expect run:missing_mesh_file 2 stderr no_such_mesh.msh -- "$BIN" run "$D/missing_mesh_file.toml" \
   --out "$TMP/run_nomesh" -q -- "cannot open mesh file" "No such file"
 check_mesh garbage_mesh garbage.msh 2 "mesh file" "line 1"
-check_mesh truncated_mesh truncated_2d.msh 2 "mesh file" "gmsh"
-check_mesh undefined_node undefined_node_2d.msh 2 "mesh file" "node index 9"
+check_mesh truncated_mesh truncated_2d.msh 2 "mesh file" "\$Nodes, line 17" "expected a node tag" "found '\$EndNodes'"
+check_mesh undefined_node undefined_node_2d.msh 2 "mesh file" "element 8" "line 29" "node 9 is not defined"
 check_mesh inverted_tet inverted_tet_3d.msh 2 "element 2" "inverted tetrahedron"
 check_mesh degenerate_triangle degenerate_triangle_2d.msh 2 "element 9" "degenerate element"
 check_mesh six_node_triangle six_node_triangle_2d.msh 2 "element 5" "Triangle 6" "Gmsh type 9" "linear elements only"
@@ -183,6 +183,91 @@ expect hole_cavity_not_bool 2 stderr bar.toml -- "$BIN" check "$ROOT/examples/si
 expect missing_case_file 2 stderr no_such_case.toml -- "$BIN" check "$D/no_such_case.toml" -- "no such file"
 expect case_is_directory 2 stderr bad_input -- "$BIN" check "$D" -- "directory"
 expect run:threads_negative 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_thr" -q --threads -1 -- "--threads" "-1"
+
+# ---- issue 10: untrusted input (docs/input_safety.md) ----
+# Mesh files are read, never interpreted: a Gmsh script under any name is refused and its
+# command does not run (the script would create cdem_pwned_by_* in the current directory).
+for c in script_mesh script_geo; do
+  expect "$c" 2 stderr "script." -- bash -c "'$BIN' check '$D/$c.toml'; rc=\$?; \
+    if ls cdem_pwned_by_* >/dev/null 2>&1; then echo 'the script ran' >&2; exit 99; fi; exit \$rc" -- \
+    "line 1: not a Gmsh MSH file" "never scripts"
+done
+check_mesh mesh_etc_passwd /etc/passwd 2 "line 1: not a Gmsh MSH file"
+# Only regular files are read.
+check_mesh mesh_dev_zero /dev/zero 2 "cannot open mesh file" "character device" "not a regular file"
+check_mesh mesh_directory bad_input 2 "cannot open mesh file" "is a directory"
+mkfifo "$TMP/fifo_case.toml"
+expect case_is_fifo 2 stderr fifo_case.toml -- "$BIN" check "$TMP/fifo_case.toml" -- \
+  "cannot open case file" "FIFO" "not a regular file"
+head -c 5000000 /dev/zero | tr '\0' '#' >"$TMP/big_case.toml"
+expect case_too_big 2 stderr big_case.toml -- "$BIN" check "$TMP/big_case.toml" -- \
+  "cannot open case file" "more than the"
+# Corrupt meshes: the section and line or byte, never a crash.
+check_mesh node_count_huge node_count_huge_2d.msh 2 "\$Nodes, line 13" "number of nodes 1000000000000000000" "more than the rest of the file"
+check_mesh truncated_binary truncated_binary_2d.msh 2 "\$Nodes, byte" "more than the rest of the file"
+check_mesh element_dim_mismatch element_dim_mismatch.msh 2 "\$Elements, line 15" "'Triangle 3' elements (dimension 2) on an entity of dimension 3"
+check_mesh node_nan node_nan_2d.msh 2 "\$Nodes, line 16" "node 3: coordinate x = nan is not a finite number"
+check_mesh node_huge node_huge_2d.msh 2 "\$Nodes, line 16" "node 3: coordinate x = 1e+30" "beyond +-1e+07"
+expect node_far 0 stderr node_far_2d.msh -- "$BIN" check "$D/node_far.toml" -- \
+  "element 6 (triangle): area 2.5e+06 m^2 is 1e+07 times the median element's" "a misplaced vertex?" "(1e+07, 1, 0)"
+check_mesh duplicate_node duplicate_node_2d.msh 2 "node tag 4 is defined twice" "\$Nodes, line 17" "\$Nodes, line 18"
+check_mesh hexahedra hexahedra_3d.msh 2 "element 2" "'Hexahedron 8' (Gmsh type 5)" "linear elements only"
+# Files that crash libgmsh 4.8's reader (tests/fuzz/regressions/msh): refused with a message.
+for m in "$ROOT"/tests/fuzz/regressions/msh/*.msh; do
+  n=$(basename "$m" .msh)
+  expect "$n" 2 stderr "$n.msh" -- "$BIN" check "$D/good_2d.toml" --set "mesh.file=\"$m\"" -- "error: mesh file"
+done
+# Case text is checked before the TOML parser (toml11 3.7.1 overflows on this one).
+check invalid_utf8_key 2 "line 2, column 4" "invalid UTF-8 (byte 0xff)"
+check nul_byte 2 "line 2, column 13" "a NUL byte"
+expect set_nul_free_control 2 stderr "" -- "$BIN" check "$D/good_2d.toml" --set $'title="a\x01b"' -- \
+  "control character U+0001"
+# Resource guards, before the work starts.
+check element_size_tiny 2 "key 'mesh.generate.element_size'" "about 2.56e+11 elements (mostly from element_size 3e-06 m)" "more than the 1e+08"
+check refine_size_tiny 2 "key 'mesh.generate.refine[0].size'" "(mostly from refine[0]: size 1e-06 m" "more than the 1e+08"
+expect memory_guard 2 stderr good_2d.toml -- env CDEM_MEMORY_AVAILABLE=100000000 "$BIN" check "$D/good_2d.toml" \
+  --set 'mesh={generate={shape="rectangle", size=[1.0, 1.0], element_size=0.002}}' -- \
+  "key 'mesh.generate.element_size'" "need about" "this machine has 100 MB available (CDEM_MEMORY_AVAILABLE)"
+expect mesh_file_memory_guard 2 stderr square_2d.msh -- env CDEM_MEMORY_AVAILABLE=1000 "$BIN" check "$D/good_2d.toml" -- \
+  "cannot open mesh file" "more than the 250 B read at most" "1 kB of memory available, CDEM_MEMORY_AVAILABLE"
+expect mesh_model_memory_guard 2 stderr square_2d.msh -- env CDEM_MEMORY_AVAILABLE=5000 "$BIN" check "$D/good_2d.toml" -- \
+  "about 4 elements need about 8 kB of memory" "this machine has 5 kB available"
+check output_interval_tiny 2 "key 'simulation.output_interval'" "1e+11 field outputs" "allow_large_run"
+check dt_tiny 2 "'simulation.dt'" "1e+26 steps" "more than a run can count"
+run dt_tiny 2 "'simulation.dt'" "1e+26 steps"
+expect run:history_interval_tiny 0 stdout "" -- bash -c "'$BIN' run '$D/good_2d.toml' --out '$TMP/run_hist' -q \
+  --set simulation.history_interval=1e-30 && echo finished" -- "finished"
+check end_time_huge 2 "key 'simulation.end_time'" "2.29e+14 steps" "more than the 1e+08" "allow_large_run"
+# NaN anywhere.
+check gravity_nan 2 "key 'simulation.gravity'" "entry 1 is nan"
+check table_nan 2 "key 'boundary[1].table'" "nan"
+check output_times_nan 2 "key 'simulation.output_times'" "entry 1 is nan"
+# Nonsense, naming the key.
+check threads_huge 2 "key 'simulation.threads'" "from 0 (all cores) to 4096" "got 100000"
+expect run:threads_beyond_machine 0 stderr threads_beyond_machine.toml -- "$BIN" run "$D/threads_beyond_machine.toml" \
+  --out "$TMP/run_thr_many" -q -- "4096 threads asked (key 'simulation.threads')" "processors: using"
+expect delay_after_end 0 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" -- \
+  "key 'hole[0].charge[0].delay'" "fires at 0.0002 s" "never fires"
+check holes_coincident 2 "key 'hole[1].collar'" "hole 'h2' lies on hole 'h1'"
+expect hole_wider_than_model 2 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" --set 'hole.0.diameter=1e300' -- \
+  "key 'hole[0].diameter'" "wider than the model (1 m across)"
+expect hole_far_away 2 stderr delay_after_end.toml -- "$BIN" check "$D/delay_after_end.toml" --set 'hole.0.collar=[0.5, 1e300]' -- \
+  "key 'hole[0].collar'" "is 1e+300 m outside the model, which is 1 m across"
+check monitor_z_in_2d 2 "key 'monitor[0].point'" "z = 0.3 in a 2D case"
+check stress_yz_in_2d 2 "key 'initial_stress.stress'" "yz component 200000 in a 2D case"
+expect mesh_in_mm 0 stderr square_2d_mm.msh -- "$BIN" check "$D/mesh_in_mm.toml" -- \
+  "1000 m across with a median element of 804.738 m" "is the mesh in millimetres?" "the whole run is 1 step(s)"
+# Messages that name the real culprit.
+check youngs_huge 2 "key 'material[0].youngs_modulus'" "1e+308 Pa is no Young's modulus"
+check density_tiny 2 "key 'material[0].density'" "1e-300 kg/m^3 is no density"
+expect set_negative_index 2 stderr "" -- "$BIN" check "$D/good_2d.toml" --set material.-1.density=5 -- \
+  "--set 'material.-1.density=5'" "'-1' is not an index"
+check main_faces_typo 2 "key 'analysis.main_faces'" "no face set 'bottm'"
+expect run:unstable_quiet 3 stderr "" -- "$BIN" run "$D/unstable_run.toml" --out "$TMP/run_unstable" -q -- \
+  "run stopped: at t = " "energy blow-up"
+expect run:pressure_overflow 3 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_overflow" -q \
+  --set boundary.1.pressure=1e300 -- "run stopped: at t = " "the output written so far is in"
+expect cli_unknown_option 2 stderr "" -- "$BIN" check "$D/good_2d.toml" --no-such-option -- "--no-such-option"
 
 wait
 t1=$(date +%s%N)

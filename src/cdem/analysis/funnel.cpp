@@ -37,6 +37,7 @@ double hole_footage(const FunnelInput& in, std::span<const std::int32_t> broken,
     const double s = dot(rel, dir);
     if (norm(rel - s * dir) > radius) continue;
     const double lo = (s - 0.5 * side[i]) / step, hi = (s + 0.5 * side[i]) / step;
+    if (!std::isfinite(lo) || !std::isfinite(hi)) continue;  // a non-finite state (unstable run)
     if (hi < -kTol) continue;  // behind the collar
     const auto k_lo = static_cast<std::int64_t>(std::max(0.0, std::ceil(lo - kTol)));
     const auto k_hi = static_cast<std::int64_t>(std::floor(hi + kTol));

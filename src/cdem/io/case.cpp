@@ -1,6 +1,7 @@
 #include "cdem/io/case.hpp"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -8,8 +9,12 @@
 #include <sstream>
 
 #include "cdem/core/error.hpp"
-#include "cdem/io/toml_reader.hpp"
+#include "cdem/core/input_file.hpp"
 #include "cdem/explosive/explosive_library.hpp"
+#include "cdem/io/case_text.hpp"
+#include "cdem/io/run_limits.hpp"
+#include "cdem/io/toml_reader.hpp"
+#include "cdem/mesh/mesh_estimate.hpp"
 
 namespace cdem {
 
@@ -30,6 +35,7 @@ namespace fs = std::filesystem;
 
 // Apply "a.b.c=value" on top of the parsed document; numeric components index arrays.
 void apply_override(toml::value& root, const std::string& ov, const std::string& file) {
+  check_override_text(ov);
   const auto eq = ov.find('=');
   if (eq == std::string::npos || eq == 0)
     throw InputError(fmt::format("--set '{}': expected key=value (e.g. simulation.end_time=1e-3)", ov));
@@ -51,13 +57,15 @@ void apply_override(toml::value& root, const std::string& ov, const std::string&
     const bool last = i + 1 == parts.size();
     const auto& p = parts[i];
     if (cur->is_array()) {
+      // An index is digits only: std::stoul would take "-1" as 18446744073709551615.
       std::size_t idx = 0;
-      try {
-        idx = std::stoul(p);
-      } catch (...) {
-        throw InputError(fmt::format("--set '{}': '{}' is an array in {}; index it with a number",
-                                     ov, parts[i - 1], file));
-      }
+      const bool digits = !p.empty() && p.size() <= 9 &&
+                          std::all_of(p.begin(), p.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+      if (!digits)
+        throw InputError(fmt::format("--set '{}': '{}' is an array in {}; '{}' is not an index (0, "
+                                     "1, 2, ...)",
+                                     ov, parts[i - 1], file, p));
+      idx = std::stoul(p);
       auto& arr = cur->as_array();
       if (idx >= arr.size())
         throw InputError(fmt::format("--set '{}': index {} out of range ({} has {} entries)", ov,
@@ -96,6 +104,44 @@ Sym6 sym6(const TomlTable& t, const std::string& key) {
   return s;
 }
 
+// Physical ranges of material constants. Outside the hard range a value is no density or
+// modulus of any solid in SI units (and would overflow the time step: c_p = sqrt(M / rho));
+// outside the usual range it is legal but looks like another unit (g/cm^3, MPa, GPa).
+constexpr double kMinDensity = 1e-2, kMaxDensity = 1e6;          // kg/m^3, refused beyond
+constexpr double kUsualDensity[2] = {500, 3e4};                  // kg/m^3, warned beyond
+constexpr double kMinModulus = 1e3, kMaxModulus = 1e13;          // Pa, refused beyond
+constexpr double kUsualModulus[2] = {1e6, 1.5e12};               // Pa, warned beyond
+constexpr double kMaxStiffnessFactor = 1e4;
+
+void check_density(const TomlTable& t, const std::string& key, double rho) {
+  if (!(rho >= kMinDensity && rho <= kMaxDensity))
+    throw InputError(fmt::format("{}: {:g} kg/m^3 is no density of a solid (expected {:g} to {:g} "
+                                 "kg/m^3; rock is 1500-3500)",
+                                 t.where(key), rho, kMinDensity, kMaxDensity));
+  if (rho < kUsualDensity[0] || rho > kUsualDensity[1])
+    spdlog::warn("{}: {:g} kg/m^3 is unusual (rock is 1500-3500 kg/m^3): is it in g/cm^3 or "
+                 "another unit?",
+                 t.where(key), rho);
+}
+
+void check_modulus(const TomlTable& t, const std::string& key, double e) {
+  if (!(e >= kMinModulus && e <= kMaxModulus))
+    throw InputError(fmt::format("{}: {:g} Pa is no Young's modulus of a solid (expected {:g} to "
+                                 "{:g} Pa; rock is 1e9-1e11 Pa, i.e. 1-100 GPa)",
+                                 t.where(key), e, kMinModulus, kMaxModulus));
+  if (e < kUsualModulus[0] || e > kUsualModulus[1])
+    spdlog::warn("{}: {:g} Pa is unusual for rock (1e9-1e11 Pa): is it in MPa or GPa?",
+                 t.where(key), e);
+}
+
+// A 2D geometry (rectangle) takes [x, y]; a z would be dropped by the mesher.
+void no_z_in_2d(const TomlTable& t, const std::string& key, double z) {
+  if (z != 0)
+    throw InputError(fmt::format("{}: z = {:g} for a rectangle (a 2D mesh in the plane z = 0); "
+                                 "it would be dropped: give [x, y]",
+                                 t.where(key), z));
+}
+
 GenerateSpec parse_generate(const TomlTable& g) {
   g.check_known({"shape", "origin", "size", "element_size", "quads", "hole", "refine", "ring_width",
                  "ring_element_size", "region", "circle_segments"});
@@ -104,6 +150,10 @@ GenerateSpec parse_generate(const TomlTable& g) {
   s.origin = g.vec("origin", {});
   s.size = g.vec("size");
   const int need = s.shape == "rectangle" ? 2 : 3;
+  if (need == 2) {
+    no_z_in_2d(g, "origin", s.origin.z);
+    no_z_in_2d(g, "size", s.size.z);
+  }
   if (s.shape == "cylinder") {
     if (!(s.size.x > 0 && s.size.z > 0))
       throw InputError(fmt::format("{}: a cylinder needs size = [radius, 0, height], both > 0",
@@ -131,6 +181,10 @@ GenerateSpec parse_generate(const TomlTable& g) {
     hs.center = h.vec("center");
     hs.radius = h.positive("radius");
     hs.axis = h.vec("axis", need == 2 ? Vec3{0, -1, 0} : Vec3{0, 0, -1});
+    if (need == 2) {
+      no_z_in_2d(h, "center", hs.center.z);
+      no_z_in_2d(h, "axis", hs.axis.z);
+    }
     if (norm(hs.axis) == 0) throw InputError(fmt::format("{}: the axis is a zero vector", h.where("axis")));
     hs.axis = normalized(hs.axis);
     hs.depth = h.non_negative("depth", 0.0);
@@ -141,6 +195,7 @@ GenerateSpec parse_generate(const TomlTable& g) {
     r.check_known({"point", "size", "radius"});
     RefineSpec rs;
     rs.point = r.vec("point");
+    if (need == 2) no_z_in_2d(r, "point", rs.point.z);
     rs.size = r.positive("size");
     rs.radius = r.positive("radius");
     s.refine.push_back(rs);
@@ -160,6 +215,7 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
                    "gamma2", "A", "B", "R1", "R2", "omega", "E0"});
     ExplosiveDef e;
     e.name = t.string("name");
+    if (t.has("density")) check_density(t, "density", t.positive("density"));
     const std::string where = fmt::format("{}: explosive '{}'", t.file(), e.name);
     const std::string kind = t.choice("eos", {"landau", "jwl"}, "landau");
     if (kind == "landau")
@@ -208,6 +264,10 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
     if (!(h.length() > 0))
       throw InputError(fmt::format("{}: the hole has zero length (collar = end)", t.where("end")));
     h.diameter = t.positive("diameter");
+    if (h.diameter > 2.0 || h.diameter < 5e-3)
+      spdlog::warn("{}: {:g} m is an unusual blasthole diameter (25 mm to 0.5 m are usual): is it "
+                   "in another unit than metres?",
+                   t.where("diameter"), h.diameter);
     h.model = t.choice("model", {"bar", "solid"}, "bar") == "bar" ? ChargeModel::Bar : ChargeModel::Solid;
     h.attenuation_exponent = t.non_negative("attenuation_exponent", 1.25);
     h.cavity = t.boolean("cavity", true);
@@ -242,6 +302,10 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
       resolve(d.explosive, q.where("explosive"));
       d.length = q.positive("length");
       d.delay = q.non_negative("delay", 0.0);
+      if (d.delay >= c.end_time)
+        spdlog::warn("{}: the deck of hole '{}' fires at {:g} s, at or after end_time = {:g} s: it "
+                     "never fires in this run",
+                     q.where("delay"), h.name, d.delay, c.end_time);
       d.initiate_top = q.choice("initiation", {"bottom", "top"}, "bottom") == "top";
       d.bottom = h.end + s * up;
       d.top = h.end + (s + d.length) * up;
@@ -257,8 +321,20 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
                                    "longer than the hole ({:.6g} m)",
                                    t.where("charge"), h.name, s, h.length()));
     if (s < h.length()) h.stemming.emplace_back(s, h.length());  // top stemming (not modelled)
-    for (const auto& o : c.holes)
+    for (const auto& o : c.holes) {
       if (o.name == h.name) throw InputError(fmt::format("{}: duplicate hole name '{}'", t.where("name"), h.name));
+      // Two holes in one place (both ends within the larger radius, either way round) put two
+      // charges into the same rock: a copy-and-paste mistake.
+      const double tol = 0.5 * std::max(o.diameter, h.diameter);
+      const bool same = (norm(o.collar - h.collar) <= tol && norm(o.end - h.end) <= tol) ||
+                        (norm(o.collar - h.end) <= tol && norm(o.end - h.collar) <= tol);
+      if (same)
+        throw InputError(fmt::format("{}: hole '{}' lies on hole '{}' (collars {:.3g} m apart, "
+                                     "bottoms {:.3g} m apart, within the radius {:.3g} m): two "
+                                     "charges in one hole",
+                                     t.where("collar"), h.name, o.name, norm(o.collar - h.collar),
+                                     norm(o.end - h.end), tol));
+    }
     c.holes.push_back(h);
   }
 }
@@ -266,12 +342,23 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
 }  // namespace
 
 Case load_case(const std::string& path, const std::vector<std::string>& overrides) {
-  if (!fs::exists(path)) throw InputError(fmt::format("cannot open case file '{}': no such file", path));
-  if (fs::is_directory(path))
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw InputError(fmt::format("cannot open case file '{}': no such file", path));
+  if (fs::is_directory(path, ec))
     throw InputError(fmt::format("cannot open case file '{}': it is a directory", path));
+  const std::string text = read_input_file(path, "case file", kMaxCaseFileBytes);
+  return parse_case(text, path, overrides);
+}
+
+Case parse_case(std::string_view text, const std::string& path,
+                const std::vector<std::string>& overrides) {
+  // The text is checked before toml11 sees it (case_text.hpp).
+  check_case_text(text, path);
   toml::value root;
   try {
-    root = toml::parse(path);
+    std::istringstream is{std::string(text)};
+    root = toml::parse(is, path);
   } catch (const toml::syntax_error& e) {
     throw InputError(fmt::format("{}: TOML syntax error:\n{}", path, e.what()));
   } catch (const std::exception& e) {
@@ -300,6 +387,13 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     c.mesh_file = resolve_path(c.dir, mesh->string("file"));
   } else {
     c.generate = parse_generate(*mesh->sub("generate"));
+    // Sized now, naming the key, before anything is meshed (generate_mesh checks again).
+    const MeshEstimate est = estimate_generated_mesh(*c.generate);
+    const std::string why = model_size_problem(
+        est.elements, c.generate->shape == "rectangle" ? 2 : 3, "mostly from " + est.largest);
+    if (!why.empty())
+      throw InputError(
+          fmt::format("{}: key 'mesh.generate.{}': {}", path, est.largest_key, why));
   }
 
   // ---- simulation ----
@@ -307,7 +401,8 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
                     "history_interval", "release_distance_factor", "energy_blowup_factor",
-                    "max_steps", "gravity", "interfaces", "opened_stiffness"});
+                    "max_steps", "gravity", "interfaces", "opened_stiffness",
+                    "allow_large_run"});
   c.end_time = sim->positive("end_time");
   c.dt_safety = sim->positive("dt_safety", 0.5);
   if (c.dt_safety > 1.0)
@@ -315,8 +410,13 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
                                  "scheme is unstable)",
                                  sim->where("dt_safety"), c.dt_safety));
   c.fixed_dt = sim->non_negative("dt", 0.0);
-  c.threads = static_cast<int>(sim->integer("threads", 0));
-  if (c.threads < 0) throw InputError(fmt::format("{}: expected >= 0", sim->where("threads")));
+  {
+    const std::int64_t threads = sim->integer("threads", 0);
+    if (threads < 0 || threads > kMaxThreads)
+      throw InputError(fmt::format("{}: expected an integer from 0 (all cores) to {}, got {}",
+                                   sim->where("threads"), kMaxThreads, threads));
+    c.threads = static_cast<int>(threads);
+  }
   c.output_interval = sim->non_negative("output_interval", 0.0);
   if (sim->has("output_times")) c.output_times = sim->numbers("output_times");
   for (double t : c.output_times)
@@ -338,6 +438,12 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     throw InputError(fmt::format("{}: expected a value in (0, 4], got {} (the opened points' share "
                                  "of the blocks' stability limit; dt shrinks by 1 / sqrt(1 + it))",
                                  sim->where("opened_stiffness"), c.opened_stiffness));
+  c.allow_large_run = sim->boolean("allow_large_run", false);
+  if (norm(c.gravity) > 1e4)
+    throw InputError(fmt::format("{}: |g| = {:g} m/s^2 is more than 1000 times the Earth's; "
+                                 "expected m/s^2, e.g. [0, -9.81]",
+                                 sim->where("gravity"), norm(c.gravity)));
+  check_field_outputs(c);
 
   // ---- block materials ----
   const auto mats = top.array_of_tables("material");
@@ -361,6 +467,8 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
     if (!(m.poisson > -1.0 && m.poisson < 0.5))
       throw InputError(fmt::format("{}: expected a Poisson ratio in (-1, 0.5), got {}",
                                    t.where("poisson_ratio"), m.poisson));
+    if (m.explosive.empty() || t.has("density")) check_density(t, "density", m.density);
+    if (m.explosive.empty() || t.has("youngs_modulus")) check_modulus(t, "youngs_modulus", m.youngs);
     m.damping = t.non_negative("damping", 0.0);
     m.local_damping = t.non_negative("local_damping", 0.0);
     if (m.local_damping >= 1.0)
@@ -399,6 +507,11 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
       im.gs = t.positive("shear_fracture_energy");
     }
     im.stiffness_factor = t.positive("stiffness_factor", 10.0);
+    if (im.stiffness_factor > kMaxStiffnessFactor)
+      throw InputError(fmt::format("{}: {:g} is beyond {:g} (k_n = alpha E / h; alpha = 100 already "
+                                   "makes dt 3 times smaller)",
+                                   t.where("stiffness_factor"), im.stiffness_factor,
+                                   kMaxStiffnessFactor));
     im.precracked = t.boolean("precracked", false);
     im.is_default = t.boolean("default", false);
     if (t.has("pairs")) {
@@ -474,6 +587,11 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
       if (o.name == mo.name) throw InputError(fmt::format("{}: duplicate monitor name '{}'", t.where("name"), mo.name));
     c.monitors.push_back(mo);
   }
+  // Each monitor is located by a search over the blocks and samples a row per history sample.
+  if (c.monitors.size() > kMaxMonitors && !c.allow_large_run)
+    throw InputError(fmt::format("{}: {} [[monitor]] entries, more than the {} allowed; set "
+                                 "simulation.allow_large_run = true if they are meant",
+                                 path, c.monitors.size(), kMaxMonitors));
   if (const auto is = top.sub("initial_stress")) {
     is->check_known({"stress", "gradient", "reference_level"});
     c.initial_stress.enabled = true;
@@ -552,10 +670,12 @@ std::string resolved_case_toml(const Case& c) {
   o += fmt::format("\n[simulation]\nend_time = {:.17g}\ndt_safety = {:.17g}\ndt = {:.17g}\n"
                    "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
                    "release_distance_factor = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
-                   "max_steps = {}\ngravity = {}\ninterfaces = {}\nopened_stiffness = {:.17g}\n",
+                   "max_steps = {}\ngravity = {}\ninterfaces = {}\nopened_stiffness = {:.17g}\n"
+                   "allow_large_run = {}\n",
                    c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
                    c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
-                   c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness);
+                   c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness,
+                   c.allow_large_run);
   o += "output_times = [";
   for (std::size_t i = 0; i < c.output_times.size(); ++i)
     o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);

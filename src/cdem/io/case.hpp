@@ -3,6 +3,7 @@
 #pragma once
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -136,6 +137,7 @@ struct Case {
   std::int64_t max_steps = 0;           // 0: unlimited
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
   double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2
+  bool allow_large_run = false;         // lifts the caps on steps, outputs, samples (run_limits.hpp)
 
   Vec3 gravity{};
   ContactSettings contact;              // [contact]
@@ -157,8 +159,18 @@ struct Case {
 };
 
 // Parse and validate. `overrides` are "dotted.key=value" strings applied on top of the file
-// (the value is TOML: 3e-3, "text", [1, 2]). Throws InputError.
+// (the value is TOML: 3e-3, "text", [1, 2]). Throws InputError. The file must be a regular file
+// of at most kMaxCaseFileBytes (input_file.hpp); its text is checked (case_text.hpp) before
+// the TOML parser sees it.
 Case load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// load_case on text already read; `path` names it and places relative paths. No file is read.
+Case parse_case(std::string_view text, const std::string& path,
+                const std::vector<std::string>& overrides = {});
+
+// Largest thread count a case or the command line may ask for (more than the machine has are
+// used as the machine's processors, with a warning: run.cpp).
+inline constexpr int kMaxThreads = 4096;
 
 // The fully resolved case (every default filled in) as TOML text.
 std::string resolved_case_toml(const Case& c);

@@ -5,18 +5,26 @@
 #include <cmath>
 
 #include "cdem/core/error.hpp"
+#include "cdem/core/text.hpp"
 
 namespace cdem {
 namespace {
 std::string type_name(const toml::value& v) {
   switch (v.type()) {
-    case toml::value_t::boolean: return "a boolean";
-    case toml::value_t::integer: return "an integer";
-    case toml::value_t::floating: return "a number";
-    case toml::value_t::string: return "a string";
-    case toml::value_t::array: return "an array";
-    case toml::value_t::table: return "a table";
-    default: return "a date or time";
+    case toml::value_t::boolean:
+      return "a boolean";
+    case toml::value_t::integer:
+      return "an integer";
+    case toml::value_t::floating:
+      return "a number";
+    case toml::value_t::string:
+      return "a string";
+    case toml::value_t::array:
+      return "an array";
+    case toml::value_t::table:
+      return "a table";
+    default:
+      return "a date or time";
   }
 }
 }  // namespace
@@ -54,7 +62,8 @@ double TomlTable::number(const std::string& key) const {
     x = static_cast<double>(r->as_integer());
   else
     fail(key, "a number");
-  if (!std::isfinite(x)) throw InputError(fmt::format("{}: expected a finite number", where(key)));
+  if (!std::isfinite(x))
+    throw InputError(fmt::format("{}: expected a finite number, got {}", where(key), x));
   return x;
 }
 double TomlTable::number(const std::string& key, double dflt) const {
@@ -71,8 +80,7 @@ double TomlTable::positive(const std::string& key, double dflt) const {
 }
 double TomlTable::non_negative(const std::string& key, double dflt) const {
   const double x = number(key, dflt);
-  if (x < 0)
-    throw InputError(fmt::format("{}: expected a number >= 0, got {}", where(key), x));
+  if (x < 0) throw InputError(fmt::format("{}: expected a number >= 0, got {}", where(key), x));
   return x;
 }
 std::int64_t TomlTable::integer(const std::string& key, std::int64_t dflt) const {
@@ -90,7 +98,13 @@ bool TomlTable::boolean(const std::string& key, bool dflt) const {
 std::string TomlTable::string(const std::string& key) const {
   const toml::value* r = raw(key);
   if (!r || !r->is_string()) fail(key, "a string");
-  return r->as_string().str;
+  const std::string& s = r->as_string().str;
+  // Escapes can put any character in a TOML string; names and paths need no control characters
+  // (they go into messages, CSV and VTU files).
+  if (const auto bad = check_text(s, false))
+    throw InputError(
+        fmt::format("{}: the string holds {} at byte {}", where(key), bad->what, bad->offset + 1));
+  return s;
 }
 std::string TomlTable::string(const std::string& key, const std::string& dflt) const {
   return has(key) ? string(key) : dflt;
@@ -117,6 +131,9 @@ std::vector<double> TomlTable::numbers(const std::string& key) const {
     else
       throw InputError(fmt::format("{}: expected an array of numbers, found {} in it", where(key),
                                    type_name(e)));
+    if (!std::isfinite(out.back()))
+      throw InputError(fmt::format("{}: entry {} is {}; expected finite numbers", where(key),
+                                   out.size() - 1, out.back()));
   }
   return out;
 }
@@ -128,6 +145,8 @@ std::vector<std::string> TomlTable::strings(const std::string& key) const {
     if (!e.is_string())
       throw InputError(fmt::format("{}: expected an array of strings, found {} in it", where(key),
                                    type_name(e)));
+    if (const auto bad = check_text(e.as_string().str, false))
+      throw InputError(fmt::format("{}: entry {} holds {}", where(key), out.size(), bad->what));
     out.push_back(e.as_string().str);
   }
   return out;
@@ -135,8 +154,8 @@ std::vector<std::string> TomlTable::strings(const std::string& key) const {
 Vec3 TomlTable::vec(const std::string& key) const {
   const auto a = numbers(key);
   if (a.size() != 2 && a.size() != 3)
-    throw InputError(fmt::format("{}: expected 2 or 3 numbers [x, y(, z)], got {}", where(key),
-                                 a.size()));
+    throw InputError(
+        fmt::format("{}: expected 2 or 3 numbers [x, y(, z)], got {}", where(key), a.size()));
   return {a[0], a[1], a.size() == 3 ? a[2] : 0.0};
 }
 Vec3 TomlTable::vec(const std::string& key, Vec3 dflt) const { return has(key) ? vec(key) : dflt; }
@@ -157,6 +176,9 @@ std::vector<std::pair<double, double>> TomlTable::table(const std::string& key) 
         p[i] = static_cast<double>(q.as_integer());
       else
         throw InputError(fmt::format("{}: expected numbers in [time, value]", where(key)));
+      if (!std::isfinite(p[i]))
+        throw InputError(fmt::format("{}: entry {} has {} {}; expected finite numbers", where(key),
+                                     out.size(), i == 0 ? "time" : "value", p[i]));
     }
     if (!out.empty() && p[0] <= out.back().first)
       throw InputError(fmt::format("{}: times must increase (found {} after {})", where(key), p[0],

@@ -17,6 +17,7 @@
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/mesh/mesh_estimate.hpp"
 
 namespace cdem {
 namespace {
@@ -72,12 +73,6 @@ Body check_spec(const GenerateSpec& s) {
   b.extent = std::max({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z});
   if (s.region.empty()) spec_error("the main region needs a name");
 
-  // A guard against typing mistakes: the global size alone must not ask for a huge mesh.
-  const double estimate = b.measure / std::pow(s.element_size, b.dim) * (b.dim == 2 ? 2.3 : 6.0);
-  if (estimate > 5e7)
-    spec_error(fmt::format("element_size {} m would give about {:.0f} elements; use a larger size",
-                           s.element_size, estimate));
-
   for (std::size_t i = 0; i < s.holes.size(); ++i) {
     const HoleSpec& h = s.holes[i];
     if (!(h.radius > 0))
@@ -105,6 +100,10 @@ Body check_spec(const GenerateSpec& s) {
                              s.ring_width));
     if (!(s.ring_element_size >= 0)) spec_error("ring_element_size must be >= 0 (0: element_size)");
   }
+  // Before Gmsh meshes for minutes: the element count (refinements and curved walls included)
+  // against the cap and this machine's memory (mesh_estimate.hpp).
+  const MeshEstimate est = estimate_generated_mesh(s);
+  check_model_size(est.elements, b.dim, "mesh generation", "mostly from " + est.largest);
   return b;
 }
 

@@ -1,5 +1,5 @@
-// Gmsh front end, reading and writing: the Gmsh session guard, the extraction of a Mesh from
-// the in-memory Gmsh model (shared with generate_mesh), read_gmsh and write_gmsh.
+// Gmsh front end: the Gmsh session guard, the extraction of a Mesh from the in-memory Gmsh model
+// (generate_mesh), read_gmsh (the project's own MSH reader, no Gmsh) and write_gmsh (Gmsh).
 // Gmsh 4.8 C++ API (gmsh.h); element type numbers are those of the MSH format
 // (1 line, 2 triangle, 3 quadrangle, 4 tetrahedron, 15 point).
 #include "cdem/mesh/gmsh_io.hpp"
@@ -20,6 +20,9 @@
 #include <utility>
 
 #include "cdem/core/error.hpp"
+#include "cdem/core/input_file.hpp"
+#include "cdem/mesh/mesh_assembly.hpp"
+#include "cdem/mesh/msh_reader.hpp"
 
 namespace cdem {
 
@@ -143,286 +146,71 @@ void GmshSession::rethrow_as_mesh_error() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Extraction of the current Gmsh model
-
-namespace {
-
-struct TypeInfo {
-  std::string name;
-  int dim = 0;
-  int num_nodes = 0;
-};
-
-// Elements of one type on one model entity, as Gmsh returns them.
-struct Block {
-  int entity_dim = 0;
-  int entity_tag = 0;
-  int type = 0;
-  const TypeInfo* info = nullptr;
-  std::vector<std::size_t> tags;
-  std::vector<std::size_t> nodes;  // num_nodes per element
-};
-
-std::string group_name(int dim, int tag) {
-  std::string name;
-  gmsh::model::getPhysicalName(dim, tag, name);
-  return name.empty() ? std::to_string(tag) : name;
-}
-
-}  // namespace
+// Extraction of the current Gmsh model (generated meshes): its nodes, element blocks and
+// physical groups as a RawModel, assembled with the same rules as a mesh file.
 
 Mesh detail::extract_gmsh_model(const std::string& source) {
-  auto fail = [&](const std::string& what) -> void {
-    throw MeshError(fmt::format("{}: {}", source, what));
-  };
-
-  // All elements, entity by entity.
-  std::map<int, TypeInfo> types;
-  std::vector<Block> blocks;
-  int top = -1;
+  RawModel raw;
+  {
+    std::vector<std::size_t> ntags;
+    std::vector<double> coord, param;
+    gmsh::model::mesh::getNodes(ntags, coord, param, -1, -1, false, false);
+    raw.node_tags.assign(ntags.begin(), ntags.end());
+    raw.node_coords.resize(ntags.size());
+    for (std::size_t i = 0; i < ntags.size(); ++i)
+      raw.node_coords[i] = Vec3{coord[3 * i], coord[3 * i + 1], coord[3 * i + 2]};
+  }
   gmsh::vectorpair entities;
-  gmsh::model::getEntities(entities);
+  gmsh::model::getEntities(entities);  // by dimension, then tag
   for (const auto& [edim, etag] : entities) {
     std::vector<int> etypes;
     std::vector<std::vector<std::size_t>> etags, enodes;
     gmsh::model::mesh::getElements(etypes, etags, enodes, edim, etag);
     for (std::size_t i = 0; i < etypes.size(); ++i) {
       if (etags[i].empty()) continue;
-      auto it = types.find(etypes[i]);
-      if (it == types.end()) {
-        TypeInfo ti;
-        int order = 0, primary = 0;
-        std::vector<double> local;
-        gmsh::model::mesh::getElementProperties(etypes[i], ti.name, ti.dim, order, ti.num_nodes,
-                                                local, primary);
-        it = types.emplace(etypes[i], ti).first;
-      }
-      Block b;
+      RawElementBlock b;
       b.entity_dim = edim;
       b.entity_tag = etag;
       b.type = etypes[i];
-      b.info = &it->second;
-      b.tags = std::move(etags[i]);
-      b.nodes = std::move(enodes[i]);
-      top = std::max(top, b.info->dim);
-      blocks.push_back(std::move(b));
+      b.tags.assign(etags[i].begin(), etags[i].end());
+      b.nodes.assign(enodes[i].begin(), enodes[i].end());
+      raw.blocks.push_back(std::move(b));
     }
   }
-  if (top < 2)
-    fail("no 2D or 3D elements (a mesh file must contain the mesh, not only the geometry)");
-
-  // Element types: linear triangles and quadrangles (2D), linear tetrahedra (3D), their
-  // boundary lines / triangles, points. Anything else (second order, hexahedra, ...) is refused.
-  const int facet_type = top == 2 ? 1 : 2;
-  for (const Block& b : blocks) {
-    const bool ok = top == 2 ? (b.type == 2 || b.type == 3 || b.type == 1 || b.type == 15)
-                             : (b.type == 4 || b.type == 2 || b.type == 1 || b.type == 15);
-    if (!ok)
-      fail(fmt::format(
-          "element {}: unsupported element type '{}' (Gmsh type {}); cdemblast takes "
-          "linear elements only: 3-node triangles and 4-node quadrilaterals in 2D, 4-node "
-          "tetrahedra in 3D, with 2-node lines, 3-node triangles and points on boundaries",
-          b.tags.front(), b.info->name, b.type));
-  }
-  auto is_top = [&](const Block& b) { return b.info->dim == top; };
-
-  Mesh mesh;
-  mesh.dim = top;
-
-  // Regions: physical groups of the top dimension, by increasing tag; the first group holding
-  // an entity gets its elements; groups of the same name are one region.
   gmsh::vectorpair groups;
-  gmsh::model::getPhysicalGroups(groups);
-  std::map<int, int> entity_region;  // top-dim entity tag -> region index
-  std::vector<int> region_group;     // a physical group tag of each region (for messages)
-  auto region_of_name = [&](const std::string& name, int group) {
-    int r = mesh.region_index(name);
-    if (r < 0) {
-      r = static_cast<int>(mesh.region_names.size());
-      mesh.region_names.push_back(name);
-      region_group.push_back(group);
-    }
-    return r;
-  };
+  gmsh::model::getPhysicalGroups(groups);  // by dimension, then tag
   for (const auto& [gdim, gtag] : groups) {
-    if (gdim != top) continue;
-    const int r = region_of_name(group_name(gdim, gtag), gtag);
-    std::vector<int> ents;
-    gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, ents);
-    for (int e : ents) entity_region.emplace(e, r);  // keeps the first group
+    RawPhysicalGroup g;
+    g.dim = gdim;
+    g.tag = gtag;
+    gmsh::model::getPhysicalName(gdim, gtag, g.name);
+    gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, g.entities);
+    raw.groups.push_back(std::move(g));
   }
-
-  // Top-dimension elements, sorted by element tag (the file's numbering).
-  struct Elem {
-    std::size_t tag;
-    ElemType type;
-    std::array<std::size_t, 4> nodes;
-    int region;
-  };
-  std::vector<Elem> elems;
-  int default_region = -1;
-  for (const Block& b : blocks) {
-    if (!is_top(b)) continue;
-    int r;
-    if (auto it = entity_region.find(b.entity_tag); it != entity_region.end()) {
-      r = it->second;
-    } else {
-      if (default_region < 0) default_region = region_of_name("default", -1);
-      r = default_region;
-    }
-    const ElemType t =
-        b.type == 2 ? ElemType::Tri3 : (b.type == 3 ? ElemType::Quad4 : ElemType::Tet4);
-    const std::size_t nn = static_cast<std::size_t>(b.info->num_nodes);
-    for (std::size_t i = 0; i < b.tags.size(); ++i) {
-      Elem e{b.tags[i], t, {0, 0, 0, 0}, r};
-      for (std::size_t k = 0; k < nn; ++k) e.nodes[k] = b.nodes[i * nn + k];
-      elems.push_back(e);
-    }
-  }
-  std::stable_sort(elems.begin(), elems.end(),
-                   [](const Elem& a, const Elem& b) { return a.tag < b.tag; });
-
-  // Every region has elements.
-  std::vector<std::size_t> region_count(mesh.region_names.size(), 0);
-  for (const Elem& e : elems) ++region_count[static_cast<std::size_t>(e.region)];
-  for (std::size_t r = 0; r < region_count.size(); ++r)
-    if (region_count[r] == 0)
-      fail(fmt::format("region '{}' (physical group {} of dimension {}) has no elements{}",
-                       mesh.region_names[r], region_group[r], top,
-                       " (or all of them belong to an earlier physical group)"));
-
-  // Vertices: the nodes of the elements, numbered 0..n-1 in increasing node tag order.
-  std::vector<std::size_t> used;
-  used.reserve(elems.size() * 4);
-  for (const Elem& e : elems)
-    for (int k = 0; k < nodes_of(e.type); ++k) used.push_back(e.nodes[static_cast<std::size_t>(k)]);
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
-  std::unordered_map<std::size_t, std::int32_t> vertex_of;
-  vertex_of.reserve(used.size());
-  for (std::size_t i = 0; i < used.size(); ++i)
-    vertex_of.emplace(used[i], static_cast<std::int32_t>(i));
-
-  {
-    std::vector<std::size_t> ntags;
-    std::vector<double> coord, param;
-    gmsh::model::mesh::getNodes(ntags, coord, param, -1, -1, false, false);
-    mesh.vertices.assign(used.size(), Vec3{});
-    std::vector<char> found(used.size(), 0);
-    for (std::size_t i = 0; i < ntags.size(); ++i) {
-      auto it = vertex_of.find(ntags[i]);
-      if (it == vertex_of.end()) continue;
-      const auto v = static_cast<std::size_t>(it->second);
-      mesh.vertices[v] = Vec3{coord[3 * i], coord[3 * i + 1], coord[3 * i + 2]};
-      found[v] = 1;
-    }
-    for (std::size_t v = 0; v < used.size(); ++v)
-      if (!found[v])
-        fail(fmt::format("node {} is used by elements but has no coordinates", used[v]));
-  }
-
-  const std::size_t ne = elems.size();
-  mesh.elem_type.resize(ne);
-  mesh.elem_vertices.resize(ne);
-  mesh.elem_region.resize(ne);
-  mesh.elem_tag.resize(ne);
-  for (std::size_t i = 0; i < ne; ++i) {
-    const Elem& e = elems[i];
-    mesh.elem_type[i] = e.type;
-    std::array<std::int32_t, 4> v{-1, -1, -1, -1};
-    for (int k = 0; k < nodes_of(e.type); ++k)
-      v[static_cast<std::size_t>(k)] = vertex_of.at(e.nodes[static_cast<std::size_t>(k)]);
-    mesh.elem_vertices[i] = v;
-    mesh.elem_region[i] = e.region;
-    mesh.elem_tag[i] = static_cast<std::int64_t>(e.tag);
-  }
-
-  // Face sets: physical groups of dimension top - 1; facets sorted by element tag.
-  for (const auto& [gdim, gtag] : groups) {
-    if (gdim == 0) {
-      const std::string name = group_name(gdim, gtag);
-      if (std::find(mesh.point_names.begin(), mesh.point_names.end(), name) ==
-          mesh.point_names.end())
-        mesh.point_names.push_back(name);
-    }
-    if (gdim != top - 1) continue;
-    const std::string name = group_name(gdim, gtag);
-    std::vector<int> ents;
-    gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, ents);
-    std::vector<std::pair<std::size_t, Facet>> facets;
-    for (const Block& b : blocks) {
-      if (b.entity_dim != gdim || std::find(ents.begin(), ents.end(), b.entity_tag) == ents.end())
-        continue;
-      if (b.type != facet_type)
-        fail(fmt::format(
-            "element {}: a '{}' in face set '{}' (physical group {} of dimension {}); {} face sets "
-            "take {} only",
-            b.tags.front(), b.info->name, name, gtag, gdim, top == 2 ? "2D" : "3D",
-            top == 2 ? "2-node lines" : "3-node triangles"));
-      const std::size_t nn = static_cast<std::size_t>(b.info->num_nodes);
-      for (std::size_t i = 0; i < b.tags.size(); ++i) {
-        Facet f;
-        for (std::size_t k = 0; k < nn; ++k) {
-          const std::size_t node = b.nodes[i * nn + k];
-          auto it = vertex_of.find(node);
-          if (it == vertex_of.end())
-            fail(fmt::format(
-                "element {} of face set '{}': node {} is not a vertex of any {}D element (a face "
-                "set must lie on the mesh)",
-                b.tags[i], name, node, top));
-          f.v[k] = it->second;
-        }
-        facets.emplace_back(b.tags[i], f);
-      }
-    }
-    std::stable_sort(facets.begin(), facets.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
-    FaceSet* fs = nullptr;
-    for (FaceSet& other : mesh.face_sets)
-      if (other.name == name) fs = &other;
-    if (fs == nullptr) {
-      mesh.face_sets.push_back(FaceSet{name, {}});
-      fs = &mesh.face_sets.back();
-    }
-    for (const auto& tf : facets) fs->facets.push_back(tf.second);
-  }
-  for (const FaceSet& fs : mesh.face_sets)
-    if (fs.facets.empty())
-      fail(fmt::format("face set '{}' (physical group of dimension {}) has no elements", fs.name,
-                       top - 1));
-
-  check_mesh(mesh, source);
-  return mesh;
+  return assemble_mesh(raw, source);
 }
 
 // ---------------------------------------------------------------------------------------------
-// Reading
+// Reading: the project's own MSH reader; Gmsh never sees a mesh file (docs/input_safety.md).
 
 Mesh read_gmsh(const std::string& path) {
-  // Check the file before Gmsh sees it: Gmsh does not fail on a missing file.
-  {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-      throw MeshError(fmt::format("cannot open mesh file '{}': is a directory", path));
-    std::ifstream f(path, std::ios::binary);
-    if (!f)
-      throw MeshError(fmt::format("cannot open mesh file '{}': {}", path, std::strerror(errno)));
-  }
   const std::string source = fmt::format("mesh file '{}'", path);
-  GmshSession session(source);
+  std::string bytes;
   try {
-    gmsh::open(path);
-    session.check_log();
-    return detail::extract_gmsh_model(source);
-  } catch (...) {
-    session.rethrow_as_mesh_error();
+    const FileLimit limit = max_mesh_file_bytes();
+    bytes = read_input_file(path, "mesh file", limit.bytes, limit.reason);
+  } catch (const MeshError&) {
+    throw;
+  } catch (const InputError& e) {
+    throw MeshError(e.what());
   }
+  return read_msh(bytes, source);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Writing
 
-void write_gmsh(const Mesh& mesh, const std::string& path) {
+void write_gmsh(const Mesh& mesh, const std::string& path, double msh_version, bool binary) {
   const std::string source = fmt::format("mesh file '{}'", path);
   auto fail = [&](const std::string& what) -> void {
     throw MeshError(fmt::format("cannot write {}: {}", source, what));
@@ -521,8 +309,10 @@ void write_gmsh(const Mesh& mesh, const std::string& path) {
     }
     const std::string ext = std::filesystem::path(path).extension().string();
     if (ext == ".msh") {
-      gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
-      gmsh::option::setNumber("Mesh.Binary", 0);
+      if (msh_version != 2.2 && msh_version != 4.0 && msh_version != 4.1)
+        fail(fmt::format("MSH version {} (expected 2.2, 4.0 or 4.1)", msh_version));
+      gmsh::option::setNumber("Mesh.MshFileVersion", msh_version);
+      gmsh::option::setNumber("Mesh.Binary", binary ? 1 : 0);
     }
     gmsh::option::setNumber("Mesh.SaveAll", 0);
     gmsh::write(path);

@@ -1,5 +1,7 @@
-// Gmsh front end: read .msh files (ASCII or binary, any version Gmsh 4.8 reads) and generate
-// simple geometries with the OpenCASCADE kernel. All through the Gmsh C++ API.
+// Mesh front end: read .msh files (MSH 2.2, 4.0, 4.1, ASCII or binary) with the project's own
+// reader (msh_reader.hpp; Gmsh never sees a mesh file: it would run a file it cannot read as a
+// mesh as a script), generate simple geometries with Gmsh's OpenCASCADE kernel through the
+// Gmsh C++ API, and write .msh files with Gmsh.
 #pragma once
 #include <cstddef>
 #include <optional>
@@ -52,17 +54,28 @@ class GmshSession {
 //   strictly convex (all four corner cross products positive after reordering);
 // - 3D: tetrahedron volume V = (x1-x0).((x2-x0)x(x3-x0))/6; |V| < 1e-12 * mean |V| is
 //   "degenerate", V < 0 is "inverted tetrahedron (negative volume)" (not reordered: a
-//   negative tetrahedron usually means a broken mesh, not a convention).
+//   negative tetrahedron usually means a broken mesh, not a convention);
+// - every vertex coordinate finite; before the degenerate test, an element whose |area| or
+//   |volume| is more than 1e9 times the median element's is reported as such (a misplaced
+//   vertex would otherwise inflate the mean and have a sound element called degenerate);
+//   beyond 1e6 times it is a warning.
 // read_gmsh and generate_mesh run it on every mesh they return.
 void check_mesh(Mesh& mesh, const std::string& source);
 
-// Read a mesh file. Physical groups of the top dimension become regions (elements outside any
+// Read a mesh file (MSH 2.2, 4.0 or 4.1, ASCII or binary; anything else is refused, nothing is
+// interpreted). Physical groups of the top dimension become regions (elements outside any
 // physical group go to a region named "default"); physical groups of dimension dim-1 become
 // face sets. Unnamed physical groups are named by their tag ("1", "2", ...).
-// Throws MeshError naming the file and the element or region at fault: missing or unreadable
-// file, unknown element types (anything but 3-node triangles, 4-node quads, 4-node tets and
-// their boundary lines/triangles/points), degenerate elements (area/volume below 1e-12 of the
-// mean), inverted tetrahedra, non-convex quads, empty regions or face sets.
+// Throws MeshError naming the file and the section and line or byte, the element or node, or
+// the region at fault: missing or unreadable file, not a regular file, larger than
+// max_mesh_file_bytes(), not MSH or a version other than 2.2/4.0/4.1, malformed or truncated
+// sections, counts larger than the file could hold, non-finite or huge (> 1e7) coordinates,
+// node tags defined twice or used but not defined, element tags used twice, unknown element
+// types (anything but 3-node triangles, 4-node quads, 4-node tets and their boundary
+// lines/triangles/points), degenerate elements (area/volume below 1e-12 of the mean), inverted
+// tetrahedra, non-convex quads, empty regions or face sets.
+// MSH 2.2 gives every element its own physical group; an element written once per physical
+// group (same tag, type and nodes, as Gmsh writes it) belongs to all of them.
 // 2D elements given clockwise are reordered counter-clockwise (that is a convention, not an
 // inversion); the mesh must lie in the z = 0 plane.
 // Details: the mesh dimension is the highest dimension with elements; lower-dimensional
@@ -74,12 +87,15 @@ void check_mesh(Mesh& mesh, const std::string& source);
 // a face set must use only vertices of the elements.
 Mesh read_gmsh(const std::string& path);
 
-// Write a mesh (for examples and tests), format chosen by the extension (.msh: v4.1 ASCII;
-// other extensions Gmsh knows, e.g. .vtk, are passed to Gmsh). One discrete entity and one
-// physical group per region (tag = region index + 1) and per face set; element tags are
-// mesh.elem_tag when those are positive and increasing, else 1..n. read_gmsh gives the mesh
-// back (same vertices, element order, regions, face sets). point_names are not written.
-void write_gmsh(const Mesh& mesh, const std::string& path);
+// Write a mesh (for examples and tests), format chosen by the extension (.msh: MSH msh_version
+// 2.2, 4.0 or 4.1, ASCII or binary; Gmsh 4.8 writes 4.0 in ASCII only; other extensions Gmsh
+// knows, e.g. .vtk, are passed to Gmsh). One discrete entity and one physical group per region
+// (tag = region index + 1) and per face set; element tags are mesh.elem_tag when those are
+// positive and increasing, else 1..n (MSH 2.2: Gmsh numbers the elements it writes 1..n).
+// read_gmsh gives the mesh back (same vertices, element order, regions, face sets).
+// point_names are not written.
+void write_gmsh(const Mesh& mesh, const std::string& path, double msh_version = 4.1,
+                bool binary = false);
 
 // A hole. 2D: `depth` == 0 is a circle of `radius` at `center`; `depth` > 0 is a slot, the
 // blasthole seen in plane strain: a plain rectangle of width 2 * radius from the collar `center`
@@ -134,9 +150,9 @@ struct GenerateSpec {
 Mesh generate_mesh(const GenerateSpec& spec);
 
 namespace detail {
-// Build a Mesh from the current Gmsh model (inside a GmshSession), with the rules of read_gmsh,
-// and check it (check_mesh). `source` names the model in messages. Shared by read_gmsh (after
-// gmsh::open) and generate_mesh (after meshing).
+// Build a Mesh from the current Gmsh model (inside a GmshSession), with the rules of read_gmsh
+// (assemble_mesh, mesh_assembly.hpp), and check it (check_mesh). `source` names the model in
+// messages. Used by generate_mesh after meshing.
 Mesh extract_gmsh_model(const std::string& source);
 }  // namespace detail
 

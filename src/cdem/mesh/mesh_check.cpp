@@ -1,12 +1,14 @@
 // Mesh checks shared by read_gmsh and generate_mesh: consistency, 2D plane and orientation,
 // degenerate / inverted / non-convex elements. See check_mesh in gmsh_io.hpp.
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "cdem/core/error.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
@@ -17,6 +19,8 @@ namespace {
 // Relative tolerances of the checks (fractions of the mesh extent or of the mean measure).
 constexpr double plane_tol = 1e-12;       // |z| of a 2D mesh, relative to its extent
 constexpr double degenerate_tol = 1e-12;  // |area| or |volume|, relative to the mean
+constexpr double outlier_ratio = 1e9;     // |area| or |volume| against the median's: refused
+constexpr double outlier_warn = 1e6;      // the same: warned (graded meshes stay far below)
 
 class Checker {
  public:
@@ -24,6 +28,7 @@ class Checker {
 
   void run() {
     check_structure();
+    check_finite();
     if (m_.dim == 2)
       check_2d();
     else
@@ -88,6 +93,38 @@ class Checker {
     }
   }
 
+  void check_finite() const {
+    for (std::size_t i = 0; i < m_.vertices.size(); ++i) {
+      const Vec3& p = m_.vertices[i];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        fail(fmt::format("vertex {} at ({}, {}, {}) is not finite", i, p.x, p.y, p.z));
+    }
+  }
+
+  // An element far larger than the median one: a misplaced vertex (a corrupt coordinate, a
+  // node in other units). Reported before the degenerate test, which compares with the mean.
+  void check_outlier(const std::vector<double>& measure, const char* what, int power) const {
+    std::vector<double> sorted(measure);
+    const auto mid = sorted.begin() + static_cast<long>((sorted.size() - 1) / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    const double median = *mid;
+    const auto big = static_cast<std::size_t>(std::max_element(measure.begin(), measure.end()) -
+                                              measure.begin());
+    if (median > 0 && measure[big] > outlier_warn * median) {
+      std::string corners;
+      for (int k = 0; k < nodes_of(m_.elem_type[big]); ++k) {
+        const Vec3 p = x(big, k);
+        corners += fmt::format("{}({:g}, {:g}, {:g})", k ? ", " : "", p.x, p.y, p.z);
+      }
+      const std::string what_is =
+          fmt::format("{} {:g} m^{} is {:.3g} times the median element's ({:g} m^{}): a "
+                      "misplaced vertex? Its vertices: {}",
+                      what, measure[big], power, measure[big] / median, median, power, corners);
+      if (measure[big] > outlier_ratio * median) fail_elem(big, what_is);
+      spdlog::warn("{}: {}: {}", source_, elem_name(big), what_is);
+    }
+  }
+
   Vec3 x(std::size_t e, int k) const {
     return m_.vertices[static_cast<std::size_t>(m_.elem_vertices[e][static_cast<std::size_t>(k)])];
   }
@@ -124,6 +161,9 @@ class Checker {
     for (Vec3& p : m_.vertices) p.z = 0.0;
 
     const std::size_t ne = m_.num_elements();
+    std::vector<double> area(ne);
+    for (std::size_t e = 0; e < ne; ++e) area[e] = 0.5 * std::abs(twice_area(e));
+    check_outlier(area, "area", 2);
     double mean = 0;
     for (std::size_t e = 0; e < ne; ++e) mean += std::abs(twice_area(e));
     mean /= static_cast<double>(ne);
@@ -158,6 +198,9 @@ class Checker {
       const Vec3 x0 = x(e, 0);
       return dot(x(e, 1) - x0, cross(x(e, 2) - x0, x(e, 3) - x0));
     };
+    std::vector<double> volume(ne);
+    for (std::size_t e = 0; e < ne; ++e) volume[e] = std::abs(six_volume(e)) / 6;
+    check_outlier(volume, "volume", 3);
     double mean = 0;
     for (std::size_t e = 0; e < ne; ++e) mean += std::abs(six_volume(e));
     mean /= static_cast<double>(ne);

@@ -14,17 +14,38 @@
 #include "cdem/analysis/damage.hpp"
 #include "cdem/analysis/monitors.hpp"
 #include "cdem/core/error.hpp"
+#include "cdem/core/resources.hpp"
 #include "cdem/explosive/charges.hpp"
+#include "cdem/io/case_checks.hpp"
 #include "cdem/io/run_writer.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/mesh/mesh_estimate.hpp"
 #include "cdem/mesh/topology.hpp"
 #include "cdem/solver/simulation.hpp"
+#include "cdem/solver/time_step.hpp"
 
 namespace cdem {
 
 Mesh load_mesh(const Case& c) {
-  if (!c.mesh_file.empty()) return read_gmsh(c.mesh_file);
-  return generate_mesh(*c.generate);
+  if (c.mesh_file.empty()) return generate_mesh(*c.generate);  // sized before meshing
+  Mesh mesh = read_gmsh(c.mesh_file);
+  check_model_size(static_cast<double>(mesh.num_elements()), mesh.dim,
+                   fmt::format("mesh file '{}'", c.mesh_file), "");
+  return mesh;
+}
+
+int run_threads(const Case& c, int requested) {
+  const int asked = requested > 0 ? requested : c.threads;
+  const int procs = available_processors();
+  if (asked <= 0) return procs;
+  if (asked > procs) {
+    spdlog::warn("{}: {} threads asked ({}), this machine has {} processors: using {} (the "
+                 "results do not depend on the thread count)",
+                 c.path, asked, requested > 0 ? "--threads" : "key 'simulation.threads'", procs,
+                 procs);
+    return procs;
+  }
+  return asked;
 }
 
 Model build_case_model(const Case& c, const Mesh& mesh) {
@@ -83,17 +104,56 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
 
 }  // namespace
 
+// When no finite stable time step exists, say which material or block makes it so (the
+// Simulation would only say there is none).
+void diagnose_time_step(const Model& m, const Case& c) {
+  const StableStep st = stable_time_step(m, c.dt_safety);
+  if (st.dt > 0 && std::isfinite(st.dt)) return;
+  if (c.fixed_dt > 0 && std::isinf(st.dt)) return;  // nothing limits dt: the fixed one is used
+  auto material = [&](std::size_t b) -> const BlockMaterial& {
+    return m.block_materials[m.block_material[b]];
+  };
+  if (st.block >= 0 && !(st.dt_block > 0 && std::isfinite(st.dt_block))) {
+    const auto b = static_cast<std::size_t>(st.block);
+    const BlockMaterial& mat = material(b);
+    throw InputError(fmt::format(
+        "{}: material '{}': no finite stable time step: block {} (element {}) has the time limit "
+        "h/c_p = {:g} s from its smallest altitude h = {:g} m and the P-wave speed c_p = {:g} m/s "
+        "of youngs_modulus = {:g} Pa, poisson_ratio = {:g}, density = {:g} kg/m^3",
+        c.path, mat.name, b, m.block_elem_tag[b], st.dt_block, m.block_altitude0[b], mat.cp(),
+        mat.youngs, mat.poisson, mat.density));
+  }
+  if (st.node >= 0 && !(st.dt_spring > 0 && std::isfinite(st.dt_spring))) {
+    const auto n = static_cast<std::size_t>(st.node);
+    const auto b = m.node_block(n);
+    throw InputError(fmt::format(
+        "{}: material '{}': no finite stable time step: node {} of block {} (element {}) has mass "
+        "{:g} kg against its springs' stiffness (k_n = stiffness_factor x E / h): check density "
+        "and youngs_modulus",
+        c.path, material(b).name, n, b, m.block_elem_tag[b], m.mass[n]));
+  }
+  throw InputError(fmt::format("{}: no finite stable time step: the model has no rock blocks "
+                               "and no interfaces (only explosive blocks?)",
+                               c.path));
+}
+
 PreparedCase prepare_case(const Case& c, const Mesh& mesh) {
+  check_case_against_mesh(c, mesh);
   // Bars are bound before the simulation is set up: the blocks holding a charge change
   // material (time step, masses).
   Model model = build_case_model(c, mesh);
   BarCharges bars = build_bar_charges(model, c);
   const double bar_dt = make_charge_cavities(model, bars);
   SolidCharges solids = build_solid_charges(model, c);
+  diagnose_time_step(model, c);
   Simulation sim(std::move(model), c);
   if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
   if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
-  return {std::move(sim), std::move(bars), std::move(solids)};
+  const std::string dt_source =
+      c.fixed_dt > 0 ? "key 'simulation.dt'"
+                     : fmt::format("the stable step, limited by the {}", sim.stable().limit);
+  const RunSize size = check_run_size(c, sim.dt(), dt_source);
+  return {std::move(sim), std::move(bars), std::move(solids), size};
 }
 
 void add_charge_loads(PreparedCase& pc) {
@@ -105,7 +165,7 @@ void add_charge_loads(PreparedCase& pc) {
 
 RunResult run_case(const Case& c, const RunOptions& opt) {
   const auto wall0 = Clock::now();
-  const int threads = opt.threads > 0 ? opt.threads : (c.threads > 0 ? c.threads : omp_get_num_procs());
+  const int threads = run_threads(c, opt.threads);
   omp_set_num_threads(threads);
 
   Mesh mesh = load_mesh(c);
@@ -146,9 +206,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
                     field_times.end());
 
   const double dt = sim.dt();
-  const std::int64_t total_steps =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(c.end_time / dt - 1e-9)));
-  const std::int64_t steps_limit = c.max_steps > 0 ? std::min(c.max_steps, total_steps) : total_steps;
+  // Counted by check_run_size (prepare_case): at most 2^53, so the conversion is exact.
+  const auto steps_limit = static_cast<std::int64_t>(pc.size.steps);
   std::size_t next_field = 0;
   double next_hist = 0;
   RunResult res;
@@ -165,7 +224,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     sim.step(hist);
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
     if (hist) {
-      while (next_hist <= t_state + 0.5 * dt) next_hist += c.history_interval > 0 ? c.history_interval : dt;
+      // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
+      while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
       last = sim.energy();
       out.write_history(m, t_state, last, monitors);
       if (charges_csv) write_charge_rows(charges_csv, t_state, bars, solids);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cdem/io/case.hpp"
+#include "cdem/io/run_limits.hpp"
 #include "cdem/mesh/mesh.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/model/model.hpp"
@@ -25,8 +26,13 @@ struct RunResult {
   std::int64_t steps = 0;
 };
 
-// Meshing: read the case's mesh file or generate its geometry.
+// Meshing: read the case's mesh file or generate its geometry (both sized against the cap
+// and this machine's memory, mesh_estimate.hpp).
 Mesh load_mesh(const Case& c);
+
+// The OpenMP threads of a run: `requested` (--threads) when > 0, else simulation.threads, else
+// all processors; more than the processors available are used as those, with a warning.
+int run_threads(const Case& c, int requested);
 
 // Mesh + materials -> Model (the CDEM topology), with the case's names in errors.
 Model build_case_model(const Case& c, const Mesh& mesh);
@@ -36,10 +42,13 @@ Model build_case_model(const Case& c, const Mesh& mesh);
 // charges. `cdemblast run` and `cdemblast check` share it, so both report the same dt. The
 // charges' load hooks are not added yet (they capture the charges' addresses): add them where
 // the PreparedCase lives (add_charge_loads).
+// The case is also checked against its mesh (case_checks.hpp) and its run size against the
+// caps (run_limits.hpp) before anything runs.
 struct PreparedCase {
   Simulation sim;
   BarCharges bars;
   SolidCharges solids;
+  RunSize size;  // steps, field outputs, history samples
 };
 PreparedCase prepare_case(const Case& c, const Mesh& mesh);
 void add_charge_loads(PreparedCase& pc);

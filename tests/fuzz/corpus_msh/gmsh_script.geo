@@ -1,0 +1,2 @@
+SystemCall "touch /tmp/cdem_pwned";
+Merge "x.msh";

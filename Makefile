@@ -11,12 +11,15 @@ FUZZ_SECONDS ?= 45
 JOBS ?= $(shell nproc)
 PY ?= /usr/bin/python3
 
-.PHONY: all deps configure build demo test clean format sanitize sanitize-test fuzz fuzz-smoke
+.PHONY: all deps deps-test configure build demo test clean format sanitize sanitize-test fuzz fuzz-smoke
 
 all: build
 
 deps:
 	@bash scripts/install-deps.sh
+
+deps-test:
+	@bash scripts/install-deps.sh --test
 
 $(BUILD)/build.ninja:
 	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release
@@ -31,7 +34,7 @@ demo: build
 
 # ctest runs tests in parallel, each with OpenMP threads: passive waiting keeps the threads of
 # one test from spinning while another test holds the cores (10-100x slower otherwise).
-test: build
+test: deps-test build
 	cd $(BUILD) && OMP_WAIT_POLICY=PASSIVE ctest --output-on-failure -j $(JOBS)
 
 $(ASAN_BUILD)/build.ninja:

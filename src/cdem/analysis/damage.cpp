@@ -28,6 +28,30 @@ FractureDegree fracture_degree(const Model& m) {
   return fd;
 }
 
+RegionFracture fracture_degree_by_region(const Model& m) {
+  const std::size_t nr = m.region_names.size();
+  std::vector<double> total(nr, 0.0), broken(nr, 0.0);
+  for (std::size_t s = 0; s < m.n_springs(); ++s) {
+    if (!counts_as_rock(m, s)) continue;
+    const std::size_t i = s / m.springs_per_iface;
+    const auto ra = m.block_region[m.iface_block_a[i]], rb = m.block_region[m.iface_block_b[i]];
+    const double a = m.sp_area[s], br = m.sp_state[s] != kIntact ? a : 0.0;
+    total[ra] += a;
+    broken[ra] += br;
+    if (rb != ra) {
+      total[rb] += a;
+      broken[rb] += br;
+    }
+  }
+  RegionFracture rf;
+  for (std::size_t r = 0; r < nr; ++r)
+    if (total[r] > 0) {
+      rf.regions.push_back(static_cast<std::int32_t>(r));
+      rf.degree.push_back(broken[r] / total[r]);
+    }
+  return rf;
+}
+
 void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode) {
   const std::size_t nb = m.n_blocks();
   std::vector<double> total(nb, 0.0), bt(nb, 0.0), bs(nb, 0.0);

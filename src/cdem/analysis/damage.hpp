@@ -24,6 +24,17 @@ bool counts_as_rock(const Model& m, std::size_t spring);
 
 FractureDegree fracture_degree(const Model& m);
 
+// Fracture degree per region (fracture.csv degree_area_<region>, summary.json
+// fracture_degree_regions): for region r, the broken / total area of the rock spring points
+// (counts_as_rock) with at least one of their two blocks in r (an interface between two regions
+// counts in both). Only regions that have such points are listed (ascending region index): a
+// damping ring bonded elastically, or a solid charge, has none.
+struct RegionFracture {
+  std::vector<std::int32_t> regions;
+  std::vector<double> degree;  // area fraction, per listed region
+};
+RegionFracture fracture_degree_by_region(const Model& m);
+
 void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode);
 
 }  // namespace cdem

@@ -142,9 +142,25 @@ void no_z_in_2d(const TomlTable& t, const std::string& key, double z) {
                                  t.where(key), z));
 }
 
+// [[mesh.generate.refine]]: a ball around `point`, or with `to` a segment (a hole's axis).
+RefineSpec parse_refine(const TomlTable& r) {
+  r.check_known({"point", "to", "size", "radius", "grading"});
+  RefineSpec rs;
+  rs.point = r.vec("point");
+  if (r.has("to")) {
+    rs.to = r.vec("to");
+    if (!(norm(*rs.to - rs.point) > 0))
+      throw InputError(fmt::format("{}: the segment has zero length ('to' = 'point')", r.where("to")));
+  }
+  rs.size = r.positive("size");
+  rs.radius = r.positive("radius");
+  rs.grading = r.positive("grading", 0.0);
+  return rs;
+}
+
 GenerateSpec parse_generate(const TomlTable& g) {
   g.check_known({"shape", "origin", "size", "element_size", "quads", "hole", "refine", "ring_width",
-                 "ring_element_size", "region", "circle_segments"});
+                 "ring_element_size", "region", "circle_segments", "wall_sizing"});
   GenerateSpec s;
   s.shape = g.choice("shape", {"rectangle", "box", "cylinder"}, "");
   s.origin = g.vec("origin", {});
@@ -173,6 +189,7 @@ GenerateSpec parse_generate(const TomlTable& g) {
     s.circle_segments = static_cast<int>(n);
   }
   s.region = g.string("region", "rock");
+  s.wall_sizing = g.choice("wall_sizing", {"finest", "refine"}, "finest");
   s.ring_width = g.non_negative("ring_width", 0.0);
   s.ring_element_size = g.positive("ring_element_size", s.element_size);
   for (const auto& h : g.array_of_tables("hole")) {
@@ -192,12 +209,11 @@ GenerateSpec parse_generate(const TomlTable& g) {
     s.holes.push_back(hs);
   }
   for (const auto& r : g.array_of_tables("refine")) {
-    r.check_known({"point", "size", "radius"});
-    RefineSpec rs;
-    rs.point = r.vec("point");
-    if (need == 2) no_z_in_2d(r, "point", rs.point.z);
-    rs.size = r.positive("size");
-    rs.radius = r.positive("radius");
+    RefineSpec rs = parse_refine(r);
+    if (need == 2) {
+      no_z_in_2d(r, "point", rs.point.z);
+      if (rs.to) no_z_in_2d(r, "to", rs.to->z);
+    }
     s.refine.push_back(rs);
   }
   return s;
@@ -244,11 +260,16 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
       c.explosives.push_back({m.explosive, *builtin_explosive(m.explosive)});
 
   for (const auto& t : top.array_of_tables("hole")) {
-    t.check_known({"name", "collar", "end", "direction", "depth", "diameter", "model",
+    t.check_known({"name", "group", "collar", "end", "direction", "depth", "diameter", "model",
                    "attenuation_exponent", "attenuation_length", "cavity", "charge", "gas",
                    "stemming_density", "stemming_shear_strength", "vent_coefficient"});
     HoleDef h;
     h.name = t.string("name");
+    h.group = t.string("group", "");
+    if (h.group.find('.') != std::string::npos)
+      throw InputError(fmt::format("{}: '{}': a group name cannot contain '.' (it is a key of "
+                                   "[delays], and --set splits keys at dots)",
+                                   t.where("group"), h.group));
     h.collar = t.vec("collar");
     if (t.has("end") == t.has("depth"))
       throw InputError(fmt::format("{}: a hole needs either 'end' (the bottom point) or "
@@ -301,11 +322,12 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
       d.explosive = q.string("explosive");
       resolve(d.explosive, q.where("explosive"));
       d.length = q.positive("length");
-      d.delay = q.non_negative("delay", 0.0);
-      if (d.delay >= c.end_time)
+      d.own_delay = q.non_negative("delay", 0.0);
+      d.delay = d.own_delay;  // plus the group's delay (apply_delay_groups)
+      if (d.own_delay >= c.end_time)
         spdlog::warn("{}: the deck of hole '{}' fires at {:g} s, at or after end_time = {:g} s: it "
                      "never fires in this run",
-                     q.where("delay"), h.name, d.delay, c.end_time);
+                     q.where("delay"), h.name, d.own_delay, c.end_time);
       d.initiate_top = q.choice("initiation", {"bottom", "top"}, "bottom") == "top";
       d.bottom = h.end + s * up;
       d.top = h.end + (s + d.length) * up;
@@ -336,6 +358,67 @@ void parse_explosives_and_holes(const TomlTable& top, Case& c) {
                                      norm(o.end - h.end), tol));
     }
     c.holes.push_back(h);
+  }
+}
+
+// Output times after end_time are dropped with a notice, not refused: a run shortened with
+// --set simulation.end_time=... keeps the case's other output times.
+void drop_late_output_times(const TomlTable& sim, Case& c) {
+  std::string dropped;
+  std::vector<double> kept;
+  for (double t : c.output_times)
+    if (t > c.end_time)
+      dropped += fmt::format("{}{:g}", dropped.empty() ? "" : ", ", t);
+    else
+      kept.push_back(t);
+  if (dropped.empty()) return;
+  spdlog::warn("{}: output time(s) {} s after end_time = {:g} s dropped", sim.where("output_times"),
+               dropped, c.end_time);
+  c.output_times = std::move(kept);
+}
+
+// [delays]: "group" = delay (s) for every deck of the group's holes, or "group" = [d1, d2, ...]
+// one per deck from the bottom up. A deck fires at its group's delay plus its own `delay`.
+// Keys are the names of [[hole]] groups (an unknown one is an error, a typo would otherwise
+// fire nothing), so `--set delays.2=0.02` retimes group "2" in one override.
+void apply_delay_groups(const TomlTable& top, Case& c) {
+  const auto dl = top.sub("delays");
+  if (!dl) return;
+  std::vector<std::string> groups;
+  for (const auto& h : c.holes)
+    if (!h.group.empty() && std::find(groups.begin(), groups.end(), h.group) == groups.end())
+      groups.push_back(h.group);
+  std::string list;
+  for (const auto& g : groups) list += (list.empty() ? "'" : ", '") + g + "'";
+  for (const auto& [key, val] : top.raw("delays")->as_table()) {
+    DelayGroup g;
+    g.name = key;
+    if (val.is_array()) {
+      g.per_deck = true;
+      g.delays = dl->numbers(key);
+      if (g.delays.empty())
+        throw InputError(fmt::format("{}: an empty array (give one delay, or one per deck from "
+                                     "the bottom up)",
+                                     dl->where(key)));
+    } else {
+      g.delays = {dl->number(key)};
+    }
+    for (double d : g.delays)
+      if (!(d >= 0))
+        throw InputError(fmt::format("{}: expected delays >= 0 (s), got {}", dl->where(key), d));
+    if (std::find(groups.begin(), groups.end(), key) == groups.end())
+      throw InputError(fmt::format("{}: no [[hole]] has group = \"{}\" (the holes' groups: {})",
+                                   dl->where(key), key, list.empty() ? "none" : list));
+    for (auto& h : c.holes) {
+      if (h.group != key) continue;
+      if (g.per_deck && g.delays.size() != h.decks.size())
+        throw InputError(fmt::format("{}: {} delays (one per deck) but hole '{}' of group '{}' has "
+                                     "{} deck(s)",
+                                     dl->where(key), g.delays.size(), h.name, key, h.decks.size()));
+      for (std::size_t k = 0; k < h.decks.size(); ++k)
+        h.decks[k].delay = h.decks[k].own_delay + g.delays[g.per_deck ? k : 0];
+    }
+    c.delay_groups.push_back(g);
   }
 }
 
@@ -372,7 +455,7 @@ Case parse_case(std::string_view text, const std::string& path,
   const TomlTable top(root, path, "");
   top.check_known({"title", "mesh", "simulation", "material", "interface", "boundary",
                    "damping_zone", "monitor", "initial_stress", "explosive", "hole", "analysis",
-                   "contact"});
+                   "contact", "delays"});
   c.title = top.string("title", fs::path(path).stem().string());
 
   // ---- mesh ----
@@ -420,9 +503,10 @@ Case parse_case(std::string_view text, const std::string& path,
   c.output_interval = sim->non_negative("output_interval", 0.0);
   if (sim->has("output_times")) c.output_times = sim->numbers("output_times");
   for (double t : c.output_times)
-    if (t < 0 || t > c.end_time)
+    if (t < 0)
       throw InputError(fmt::format("{}: {} is outside [0, end_time = {}]", sim->where("output_times"),
                                    t, c.end_time));
+  drop_late_output_times(*sim, c);
   c.history_interval = sim->non_negative("history_interval", c.end_time / 200.0);
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
   c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
@@ -600,6 +684,7 @@ Case parse_case(std::string_view text, const std::string& path,
     c.initial_stress.reference_level = is->number("reference_level", 0.0);
   }
   parse_explosives_and_holes(top, c);
+  apply_delay_groups(top, c);
   if (const auto an = top.sub("analysis")) {
     an->check_known({"up", "surface_level", "damage_threshold", "main_faces"});
     c.analysis.up = an->vec("up", {});
@@ -656,16 +741,20 @@ std::string resolved_case_toml(const Case& c) {
     const auto& g = *c.generate;
     o += fmt::format("[mesh.generate]\nshape = {}\norigin = {}\nsize = {}\nelement_size = {:.17g}\n"
                      "quads = {}\nregion = {}\nring_width = {:.17g}\nring_element_size = {:.17g}\n"
-                     "circle_segments = {}\n",
+                     "circle_segments = {}\nwall_sizing = {}\n",
                      q(g.shape), vec_str(g.origin), vec_str(g.size), g.element_size, g.quads,
-                     q(g.region), g.ring_width, g.ring_element_size, g.circle_segments);
+                     q(g.region), g.ring_width, g.ring_element_size, g.circle_segments,
+                     q(g.wall_sizing));
     for (const auto& h : g.holes)
       o += fmt::format("[[mesh.generate.hole]]\ncenter = {}\nradius = {:.17g}\naxis = {}\n"
                        "depth = {:.17g}\nregion = {}\n",
                        vec_str(h.center), h.radius, vec_str(h.axis), h.depth, q(h.region));
-    for (const auto& r : g.refine)
+    for (const auto& r : g.refine) {
       o += fmt::format("[[mesh.generate.refine]]\npoint = {}\nsize = {:.17g}\nradius = {:.17g}\n",
                        vec_str(r.point), r.size, r.radius);
+      if (r.to) o += fmt::format("to = {}\n", vec_str(*r.to));
+      if (r.grading > 0) o += fmt::format("grading = {:.17g}\n", r.grading);
+    }
   }
   o += fmt::format("\n[simulation]\nend_time = {:.17g}\ndt_safety = {:.17g}\ndt = {:.17g}\n"
                    "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
@@ -738,6 +827,7 @@ std::string resolved_case_toml(const Case& c) {
                      q(h.lc_element_size ? "element_size" : "equivalent_radius"), h.cavity,
                      q(name_of(h.gas)), h.stemming_density, h.stemming_shear_strength,
                      h.vent_coefficient);
+    if (!h.group.empty()) o += fmt::format("group = {}\n", q(h.group));
     // Charges from the bottom up, stemming between them.
     std::vector<std::pair<double, std::string>> items;
     const Vec3 up = normalized(h.collar - h.end);
@@ -748,7 +838,7 @@ std::string resolved_case_toml(const Case& c) {
       items.emplace_back(dot(d.bottom - h.end, up),
                          fmt::format("[[hole.charge]]\nexplosive = {}\nlength = {:.17g}\ndelay = {:.17g}\n"
                                      "initiation = {}\n",
-                                     q(d.explosive), d.length, d.delay, q(d.initiate_top ? "top" : "bottom")));
+                                     q(d.explosive), d.length, d.own_delay, q(d.initiate_top ? "top" : "bottom")));
     std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     for (const auto& it : items) o += it.second;
   }
@@ -759,6 +849,14 @@ std::string resolved_case_toml(const Case& c) {
     o += "main_faces = [";
     for (std::size_t i = 0; i < c.analysis.main_faces.size(); ++i) o += (i ? ", " : "") + q(c.analysis.main_faces[i]);
     o += "]\n";
+  }
+  if (!c.delay_groups.empty()) {
+    o += "\n[delays]\n";
+    for (const auto& g : c.delay_groups) {
+      std::string v;
+      for (std::size_t k = 0; k < g.delays.size(); ++k) v += fmt::format("{}{:.17g}", k ? ", " : "", g.delays[k]);
+      o += fmt::format("{} = {}\n", q(g.name), g.per_deck ? "[" + v + "]" : v);
+    }
   }
   if (c.initial_stress.enabled)
     o += fmt::format("\n[initial_stress]\nstress = {}\ngradient = {}\nreference_level = {:.17g}\n",

@@ -71,7 +71,8 @@ struct ExplosiveDef {
 struct Deck {
   std::string explosive;    // name of an ExplosiveDef
   double length = 0;        // m
-  double delay = 0;         // initiation time t_D0 (s)
+  double delay = 0;         // initiation time t_D0 (s) = the group's delay + own_delay
+  double own_delay = 0;     // the deck's own `delay` key (s)
   bool initiate_top = false;  // default: initiated at the deck's bottom
   Vec3 bottom, top;         // derived end points
   Vec3 initiation() const { return initiate_top ? top : bottom; }
@@ -83,6 +84,7 @@ enum class ChargeModel { Bar, Solid };
 
 struct HoleDef {
   std::string name;
+  std::string group;        // delay group ("" none): its [delays] entry adds to every deck's delay
   Vec3 collar, end;         // collar (top) and bottom of the hole
   double diameter = 0;      // m
   ChargeModel model = ChargeModel::Bar;
@@ -114,6 +116,14 @@ struct AnalysisSettings {
 // broken) or "springs" (SPEC 1.3 as the method paper: every interface is a spring from t = 0).
 enum class InterfaceMode { Tied, Springs };
 inline const char* name_of(InterfaceMode i) { return i == InterfaceMode::Tied ? "tied" : "springs"; }
+
+// A delay group's entry in [delays]: one delay for every deck of its holes, or one per deck
+// from the bottom up (per_deck; every hole of the group then has that many decks).
+struct DelayGroup {
+  std::string name;
+  std::vector<double> delays;  // s; one value, or one per deck
+  bool per_deck = false;       // given as an array
+};
 
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
@@ -149,6 +159,7 @@ struct Case {
   InitialStress initial_stress;
   std::vector<ExplosiveDef> explosives;  // built-ins used by the case, then [[explosive]]
   std::vector<HoleDef> holes;
+  std::vector<DelayGroup> delay_groups;  // [delays], in key order
   AnalysisSettings analysis;
 
   const ExplosiveDef* explosive(const std::string& name) const {

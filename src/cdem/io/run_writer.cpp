@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,13 @@ std::string json_string(const std::string& s) {
 }
 std::string json_number(double x) { return std::isfinite(x) ? fmt::format("{:.10g}", x) : "null"; }
 
+std::string csv_column_name(const std::string& name) {
+  std::string o = name;
+  for (char& ch : o)
+    if (!(std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.')) ch = '_';
+  return o;
+}
+
 void write_json(const std::string& path, const std::vector<std::pair<std::string, std::string>>& kv) {
   std::ofstream o(path);
   if (!o) throw std::runtime_error(fmt::format("cannot write '{}'", path));
@@ -44,7 +52,7 @@ void write_json(const std::string& path, const std::vector<std::pair<std::string
   o << "}\n";
 }
 
-RunWriter::RunWriter(const std::string& dir, const Case& c) : dir_(dir), case_(c) {
+RunWriter::RunWriter(const std::string& dir, const Case& c, const Model* m) : dir_(dir), case_(c) {
   fs::create_directories(fs::path(dir) / "fields");
   fs::create_directories(fs::path(dir) / "cracks");
   fs::create_directories(fs::path(dir) / "fragments");
@@ -61,21 +69,34 @@ RunWriter::RunWriter(const std::string& dir, const Case& c) : dir_(dir), case_(c
                      "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
                      "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,balance,"
                      "error\n");
-  fracture_ = open_csv((fs::path(dir) / "fracture.csv").string(),
-                       "time,degree_area,tensile_area,shear_area,degree_count,broken,total\n");
+  std::string fracture_header = "time,degree_area,tensile_area,shear_area,degree_count,broken,total";
+  if (m) {
+    fracture_regions_ = fracture_degree_by_region(*m).regions;
+    for (auto r : fracture_regions_) fracture_header += ",degree_area_" + csv_column_name(m->region_names[r]);
+  }
+  fracture_ = open_csv((fs::path(dir) / "fracture.csv").string(), fracture_header + "\n");
 }
 
 RunWriter::~RunWriter() {
-  for (auto* f : {monitors_, energy_, fracture_})
+  for (auto* f : {monitors_, energy_, fracture_, reactions_})
     if (f) std::fclose(f);
 }
 
 void RunWriter::flush() {
-  for (auto* f : {monitors_, energy_, fracture_})
+  for (auto* f : {monitors_, energy_, fracture_, reactions_})
     if (f) std::fflush(f);
 }
 
-void RunWriter::write_fields(const Model& m, double t) {
+void RunWriter::write_reactions(double t, const std::vector<std::string>& face_sets,
+                                const std::vector<Vec3>& force) {
+  if (face_sets.empty()) return;
+  if (!reactions_) reactions_ = open_csv((fs::path(dir_) / "reactions.csv").string(), "time,face_set,fx,fy,fz\n");
+  for (std::size_t k = 0; k < face_sets.size(); ++k)
+    std::fprintf(reactions_, "%.9g,%s,%.9g,%.9g,%.9g\n", t, face_sets[k].c_str(), force[k].x, force[k].y,
+                 force[k].z);
+}
+
+void RunWriter::write_fields(const Model& m, double t, const std::vector<double>* max_up) {
   const std::string name = fmt::format("{:04d}", frame_++);
   // ---- blocks, each with its own nodes (cracks open as gaps) ----
   VtuMesh vm;
@@ -96,6 +117,8 @@ void RunWriter::write_fields(const Model& m, double t) {
     vel.f64.insert(vel.f64.end(), {m.v[n].x, m.v[n].y, m.v[n].z});
   }
   vm.point_data = {std::move(disp), std::move(vel)};
+  if (max_up && max_up->size() == m.n_nodes())
+    vm.point_data.push_back(VtuArray{"max_up_displacement", 1, *max_up, {}});
   std::vector<double> damage;
   std::vector<std::int32_t> mode;
   block_damage(m, damage, mode);
@@ -177,8 +200,11 @@ void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
                e.explosive_work, e.damping, e.fracture, e.initial, e.insertion, e.contact_strain,
                e.contact_friction, e.balance, e.error);
   const FractureDegree fd = fracture_degree(m);
-  std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld\n", t, fd.area, fd.tensile, fd.shear,
+  std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld", t, fd.area, fd.tensile, fd.shear,
                fd.count, static_cast<long long>(fd.broken), static_cast<long long>(fd.total));
+  if (!fracture_regions_.empty())
+    for (double d : fracture_degree_by_region(m).degree) std::fprintf(fracture_, ",%.9g", d);
+  std::fputs("\n", fracture_);
 }
 
 }  // namespace cdem

@@ -4,7 +4,9 @@
 //                        pressure, von Mises, damage, damage mode, region, fragment id
 //   cracks.pvd + cracks/cracks_NNNN.vtu   broken interface faces: mode, broken fraction,
 //                        time of breaking
-//   monitors.csv, energy.csv, fracture.csv   time histories
+//   monitors.csv, energy.csv, fracture.csv   time histories (fracture.csv also per region:
+//                        degree_area_<region>, with the model given to the constructor)
+//   reactions.csv        reaction forces per constrained face set (write_reactions)
 //   summary.json         key numbers of the run
 #pragma once
 #include <cstdio>
@@ -21,12 +23,21 @@ namespace cdem {
 
 class RunWriter {
  public:
-  RunWriter(const std::string& dir, const Case& c);
+  // With `m`, fracture.csv gets a degree_area_<region> column per region that has breakable
+  // (rock) spring points (fracture_degree_by_region).
+  RunWriter(const std::string& dir, const Case& c, const Model* m = nullptr);
   ~RunWriter();
   RunWriter(const RunWriter&) = delete;
   RunWriter& operator=(const RunWriter&) = delete;
 
-  void write_fields(const Model& m, double t);
+  // `max_up`: per node, the largest displacement along up so far (point array
+  // max_up_displacement; UpliftTracker).
+  void write_fields(const Model& m, double t, const std::vector<double>* max_up = nullptr);
+  // reactions.csv rows (time, face_set, fx, fy, fz), one per face set; the file is created at
+  // the first call.
+  void write_reactions(double t, const std::vector<std::string>& face_sets, const std::vector<Vec3>& force);
+  // The regions of fracture.csv's per-region columns (region indices) and their column names.
+  const std::vector<std::int32_t>& fracture_regions() const { return fracture_regions_; }
   void write_history(const Model& m, double t, const EnergyBalance& e,
                      const std::vector<std::int32_t>& monitor_blocks);
   void flush();
@@ -40,6 +51,8 @@ class RunWriter {
   std::FILE* monitors_ = nullptr;
   std::FILE* energy_ = nullptr;
   std::FILE* fracture_ = nullptr;
+  std::FILE* reactions_ = nullptr;
+  std::vector<std::int32_t> fracture_regions_;
   int frame_ = 0;
 };
 
@@ -47,5 +60,8 @@ class RunWriter {
 void write_json(const std::string& path, const std::vector<std::pair<std::string, std::string>>& kv);
 std::string json_string(const std::string& s);
 std::string json_number(double x);
+// A region name as a CSV column suffix: characters other than letters, digits, '_', '-' and '.'
+// become '_' (degree_area_<region>).
+std::string csv_column_name(const std::string& name);
 
 }  // namespace cdem

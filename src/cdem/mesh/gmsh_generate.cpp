@@ -92,7 +92,13 @@ Body check_spec(const GenerateSpec& s) {
     if (!(r.size > 0 && r.radius > 0))
       spec_error(fmt::format("refinement {}: size and radius must be > 0 (got {}, {})", i, r.size,
                              r.radius));
+    if (!(r.grading >= 0))
+      spec_error(fmt::format("refinement {}: grading must be >= 0 (got {})", i, r.grading));
+    if (r.to && !(norm(*r.to - r.point) > 0))
+      spec_error(fmt::format("refinement {}: the segment's ends 'point' and 'to' coincide", i));
   }
+  if (s.wall_sizing != "finest" && s.wall_sizing != "refine")
+    spec_error(fmt::format("wall_sizing must be \"finest\" or \"refine\" (got \"{}\")", s.wall_sizing));
   if (s.ring_width != 0) {
     if (s.shape != "cylinder") spec_error("ring_width is for the cylinder only");
     if (!(s.ring_width > 0 && s.ring_width < s.size.x))
@@ -214,6 +220,69 @@ gmsh::vectorpair clip_to_body(const gmsh::vectorpair& body, std::pair<int, int> 
   return out;
 }
 
+// ---- size fields (Gmsh MathEval expressions of x, y, z; Gmsh's MathEx knows Sqrt, Abs, Max) ----
+
+// Distance from (x, y, z) to the refinement's point, or to its segment point..to: with
+// t = (p - a).(b - a) / |b - a|^2 clamped to [0, 1] (1 - Max(0, 1 - Max(0, t))), the distance
+// |p - a - t (b - a)|. 2D: in the xy plane.
+std::string refine_distance(const RefineSpec& r, int dim) {
+  const Vec3 a = r.point;
+  const std::string dx = fmt::format("(x-({}))", num(a.x)), dy = fmt::format("(y-({}))", num(a.y)),
+                    dz = fmt::format("(z-({}))", num(a.z));
+  if (!r.to) {
+    return dim == 2 ? fmt::format("Sqrt({0}^2+{1}^2)", dx, dy)
+                    : fmt::format("Sqrt({0}^2+{1}^2+{2}^2)", dx, dy, dz);
+  }
+  Vec3 d = *r.to - a;
+  if (dim == 2) d.z = 0;
+  const double l2 = dot(d, d);
+  const std::string t =
+      dim == 2 ? fmt::format("(({}*({})+{}*({}))/({}))", dx, num(d.x), dy, num(d.y), num(l2))
+               : fmt::format("(({}*({})+{}*({})+{}*({}))/({}))", dx, num(d.x), dy, num(d.y), dz,
+                             num(d.z), num(l2));
+  const std::string tc = fmt::format("(1-Max(0,1-Max(0,{})))", t);
+  auto comp = [&](const std::string& e, double dk) { return fmt::format("({}-{}*({}))^2", e, tc, num(dk)); };
+  return dim == 2 ? fmt::format("Sqrt({}+{})", comp(dx, d.x), comp(dy, d.y))
+                  : fmt::format("Sqrt({}+{}+{})", comp(dx, d.x), comp(dy, d.y), comp(dz, d.z));
+}
+
+// A curved wall: the distance to it (expression) and its radius of curvature.
+struct CurvedWall {
+  std::string distance;
+  double radius = 0;
+};
+
+// The curved walls of the body: circular holes (2D circles; 3D cylinder sides, through or
+// drilled, their bottom rim included) and the cylinder's side. 2D slots are flat.
+std::vector<CurvedWall> curved_walls(const GenerateSpec& s, const std::vector<HoleFrame>& frames,
+                                     int dim) {
+  std::vector<CurvedWall> walls;
+  if (s.shape == "cylinder")
+    walls.push_back({fmt::format("Abs(Sqrt((x-({}))^2+(y-({}))^2)-({}))", num(s.origin.x),
+                                 num(s.origin.y), num(s.size.x)),
+                     s.size.x});
+  for (const HoleFrame& f : frames) {
+    const std::string dx = fmt::format("(x-({}))", num(f.c.x)), dy = fmt::format("(y-({}))", num(f.c.y)),
+                      dz = fmt::format("(z-({}))", num(f.c.z));
+    if (dim == 2) {
+      if (f.through)
+        walls.push_back({fmt::format("Abs(Sqrt({}^2+{}^2)-({}))", dx, dy, num(f.r)), f.r});
+      continue;
+    }
+    const std::string sa = fmt::format("({}*({})+{}*({})+{}*({}))", dx, num(f.a.x), dy, num(f.a.y),
+                                       dz, num(f.a.z));  // along the axis from the collar
+    const std::string rho = fmt::format("Sqrt(({}-{}*({}))^2+({}-{}*({}))^2+({}-{}*({}))^2)", dx,
+                                        sa, num(f.a.x), dy, sa, num(f.a.y), dz, sa, num(f.a.z));
+    if (f.through) {
+      walls.push_back({fmt::format("Abs({}-({}))", rho, num(f.r)), f.r});
+    } else {
+      const std::string beyond = fmt::format("(Max(0,-{0})+Max(0,{0}-({1})))", sa, num(f.depth));
+      walls.push_back({fmt::format("Sqrt(({}-({}))^2+{}^2)", rho, num(f.r), beyond), f.r});
+    }
+  }
+  return walls;
+}
+
 }  // namespace
 
 Mesh generate_mesh(const GenerateSpec& spec) {
@@ -309,9 +378,8 @@ Mesh generate_mesh(const GenerateSpec& spec) {
     }
     occ::synchronize();
 
-    // Size field: the minimum of the global size (ring_element_size in the ring) and each
-    // refinement (size within radius of the point, growing linearly to the
-    // global size at 2 * radius, no constraint beyond).
+    // Size field: the minimum of the global size (ring_element_size in the ring), each
+    // refinement and (wall_sizing "refine") the curved walls' sizes.
     std::vector<double> fields;
     if (ring) {
       // element_size inside the ring's inner radius, ring_size beyond a short linear ramp
@@ -334,33 +402,81 @@ Mesh generate_mesh(const GenerateSpec& spec) {
       field::setString(base, "F", num(spec.element_size));
       fields.push_back(base);
     }
+    // Refinements: size r.size within r.radius of the point or segment, growing linearly to
+    // element_size at refine_outer (no constraint beyond).
+    std::vector<int> refine_dist;
     for (const RefineSpec& r : spec.refine) {
-      const Vec3& p = r.point;
       const int dist = field::add("MathEval");
-      const std::string expr =
-          dim == 2
-              ? fmt::format("Sqrt((x-({}))^2+(y-({}))^2)", num(p.x), num(p.y))
-              : fmt::format("Sqrt((x-({}))^2+(y-({}))^2+(z-({}))^2)", num(p.x), num(p.y), num(p.z));
-      field::setString(dist, "F", expr);
+      field::setString(dist, "F", refine_distance(r, dim));
+      refine_dist.push_back(dist);
       const int th = field::add("Threshold");
       field::setNumber(th, "IField", dist);
       field::setNumber(th, "LcMin", r.size);
       field::setNumber(th, "LcMax", spec.element_size);
       field::setNumber(th, "DistMin", r.radius);
-      field::setNumber(th, "DistMax", 2 * r.radius);
+      field::setNumber(th, "DistMax", refine_outer(r, spec.element_size));
       field::setNumber(th, "StopAtDistMax", 1);
       fields.push_back(th);
+    }
+    // Curved walls (holes, the cylinder) get at least circle_segments elements per full turn,
+    // also where the hole is smaller than the element size: with the size field alone a 0.05 m
+    // hole in a 0.1 m mesh is cut into 3-4 segments and a charge loses 40 % of its volume.
+    // (n segments: the area of a circle is short by about (2 pi / n)^2 / 6: 2.6 % for 16.)
+    // wall_sizing "finest": Gmsh's sizes from curvature, the smaller of them and the field wins.
+    // "refine": the same rule from our own fields, W = 2 pi r / n on the wall growing by 1 m per
+    // m away from it, and inside a refinement zone that zone's size wins over W (larger or
+    // smaller: it is the size asked for there):
+    //   size = Min(base, refinements, Max(Min(W), Max(Z))),
+    // Z_j = r_j.size inside zone j, falling linearly to 0 over its graded band (0 beyond), so
+    // Max(W, Z) = W outside every zone, >= the zone's size inside (the refinement then decides).
+    const bool own_walls = spec.wall_sizing == "refine" && spec.circle_segments > 0;
+    gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", own_walls ? 0 : std::max(0, spec.circle_segments));
+    if (own_walls) {
+      std::vector<double> wall_fields, zones;
+      const double coarsest = std::max(spec.element_size, ring_size);
+      for (const CurvedWall& w : curved_walls(spec, frames, dim)) {
+        const double sc = 2 * std::numbers::pi * w.radius / spec.circle_segments;
+        if (sc >= coarsest) continue;  // the field is finer everywhere anyway
+        const int dist = field::add("MathEval");
+        field::setString(dist, "F", w.distance);
+        const int th = field::add("Threshold");
+        field::setNumber(th, "IField", dist);
+        field::setNumber(th, "LcMin", sc);
+        field::setNumber(th, "LcMax", coarsest);
+        field::setNumber(th, "DistMin", 0);
+        field::setNumber(th, "DistMax", coarsest - sc);
+        field::setNumber(th, "StopAtDistMax", 1);
+        wall_fields.push_back(th);
+      }
+      for (std::size_t j = 0; j < spec.refine.size(); ++j) {
+        const RefineSpec& r = spec.refine[j];
+        const int zone = field::add("Threshold");
+        field::setNumber(zone, "IField", refine_dist[j]);
+        field::setNumber(zone, "LcMin", r.size);
+        field::setNumber(zone, "LcMax", 0);
+        field::setNumber(zone, "DistMin", r.radius);
+        field::setNumber(zone, "DistMax", refine_outer(r, spec.element_size));
+        zones.push_back(zone);
+      }
+      if (!wall_fields.empty()) {
+        int w = static_cast<int>(wall_fields.front());
+        if (wall_fields.size() > 1) {
+          w = field::add("Min");
+          field::setNumbers(w, "FieldsList", wall_fields);
+        }
+        if (!zones.empty()) {
+          zones.push_back(w);
+          w = field::add("Max");
+          field::setNumbers(w, "FieldsList", zones);
+        }
+        fields.push_back(w);
+      }
     }
     const int min_field = field::add("Min");
     field::setNumbers(min_field, "FieldsList", fields);
     field::setAsBackgroundMesh(min_field);
     gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", 0);
     gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
-    // Curved walls (holes, the cylinder) get at least circle_segments elements per full turn,
-    // also where the hole is smaller than the element size: with the size field alone a 0.05 m
-    // hole in a 0.1 m mesh is cut into 3-4 segments and a charge loses 40 % of its volume.
-    // (n segments: the area of a circle is short by about (2 pi / n)^2 / 6: 2.6 % for 16.)
-    gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", std::max(0, spec.circle_segments));
     gmsh::option::setNumber("Mesh.ElementOrder", 1);
     gmsh::option::setNumber("General.NumThreads", 1);
     if (dim == 2 && spec.quads) {

@@ -4,6 +4,7 @@
 // Gmsh C++ API, and write .msh files with Gmsh.
 #pragma once
 #include <cstddef>
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <vector>
@@ -110,13 +111,26 @@ struct HoleSpec {
                        // instead of being empty
 };
 
-// Local refinement: element size `size` within `radius` of `point`, growing linearly to the
-// global size over a further `radius` (Gmsh MathEval distance + Threshold fields).
+// Local refinement: element size `size` within `radius` of `point` (or, with `to`, of the
+// segment from `point` to `to`: a hole's axis), growing linearly to the global size beyond:
+// over a further `radius` when `grading` is 0, else by `grading` metres of size per metre of
+// distance (size(d) = size + grading (d - radius) up to element_size). Gmsh MathEval distance
+// + Threshold fields (refine_fields in gmsh_generate.cpp).
 struct RefineSpec {
   Vec3 point;
   double size = 0;
   double radius = 0;
+  std::optional<Vec3> to = std::nullopt;  // the segment's other end; none: a ball around `point`
+  double grading = 0;      // > 0: size growth per unit distance; 0: to element_size at 2 radius
 };
+
+// Where a refinement's size has grown to element_size: 2 radius (grading 0, the linear ramp
+// over a further radius), else radius + (element_size - size) / grading.
+inline double refine_outer(const RefineSpec& r, double element_size) {
+  const double outer = r.grading > 0 ? r.radius + std::max(0.0, element_size - r.size) / r.grading
+                                     : 2 * r.radius;
+  return std::max(outer, r.radius * (1 + 1e-6));  // Threshold divides by DistMax - DistMin
+}
 
 struct GenerateSpec {
   std::string shape;        // "rectangle" (2D), "box" (3D), "cylinder" (3D, axis z)
@@ -132,6 +146,11 @@ struct GenerateSpec {
   int circle_segments = 16;      // curved walls: at least this many elements per full turn (sizes
                                  // from curvature, Mesh.MeshSizeFromCurvature); 0: sizes from the
                                  // field only
+  // How circle_segments and the size field combine on curved walls: "finest" (the smaller size
+  // wins everywhere: Gmsh's sizes from curvature), or "refine" (inside a [[refine]] zone its size
+  // wins, larger or smaller; elsewhere as "finest"; curvature sizes from the project's own
+  // fields, wall_fields in gmsh_generate.cpp).
+  std::string wall_sizing = "finest";
 };
 // Face sets of generated meshes: rectangle "left" "right" "bottom" "top"; box the same plus
 // "front" (y min) and "back" (y max), with "bottom"/"top" at z min/max; cylinder "side",

@@ -15,20 +15,26 @@ namespace {
 constexpr double kPerCell2D = 2.3;  // triangles per h^2
 constexpr double kPerCell3D = 6.0;  // tetrahedra per h^3
 
-// Elements in a ball (3D) or disc (2D) of radius r at size s, plus those of the shell r..2r
-// over which the size grows linearly from s to h (midpoint rule over 64 shells).
-double refined_zone(int dim, double r, double s, double h) {
+// Elements within distance r of a point or of a segment of length len (a ball or disc plus a
+// tube or strip) at size s, plus those of the shell r..outer over which the size grows linearly
+// from s to h (midpoint rule over 64 shells).
+double refined_zone(int dim, double r, double outer, double len, double s, double h) {
   const double pi = std::numbers::pi;
   const double per = dim == 2 ? kPerCell2D : kPerCell3D;
-  const double inner = dim == 2 ? pi * r * r : 4.0 / 3.0 * pi * r * r * r;
-  double n = inner / std::pow(s, dim);
+  auto measure = [&](double rho) {  // of the zone within rho
+    return dim == 2 ? pi * rho * rho + 2 * rho * len
+                    : 4.0 / 3.0 * pi * rho * rho * rho + pi * rho * rho * len;
+  };
+  auto boundary = [&](double rho) {  // d measure / d rho
+    return dim == 2 ? 2 * pi * rho + 2 * len : 4 * pi * rho * rho + 2 * pi * rho * len;
+  };
+  double n = measure(r) / std::pow(s, dim);
   constexpr int steps = 64;
+  const double width = outer - r;
   for (int i = 0; i < steps; ++i) {
     const double f = (i + 0.5) / steps;
-    const double rho = r * (1 + f);
     const double size = s + (h - s) * f;
-    const double area = dim == 2 ? 2 * pi * rho : 4 * pi * rho * rho;
-    n += area * (r / steps) / std::pow(size, dim);
+    n += boundary(r + width * f) * (width / steps) / std::pow(size, dim);
   }
   return per * n;
 }
@@ -74,8 +80,10 @@ MeshEstimate estimate_generated_mesh(const GenerateSpec& s) {
   for (std::size_t i = 0; i < s.refine.size(); ++i) {
     const RefineSpec& r = s.refine[i];
     if (r.size < h)
-      part(refined_zone(dim, r.radius, r.size, h),
-           fmt::format("refine[{}]: size {:g} m within {:g} m", i, r.size, r.radius),
+      part(refined_zone(dim, r.radius, refine_outer(r, h), r.to ? norm(*r.to - r.point) : 0.0,
+                        r.size, h),
+           fmt::format("refine[{}]: size {:g} m within {:g} m{}", i, r.size, r.radius,
+                       r.to ? " of a segment" : ""),
            fmt::format("refine[{}].size", i));
   }
   // Curved walls sized from curvature: a wall of radius r gets elements of 2 pi r / n; count a
@@ -89,7 +97,7 @@ MeshEstimate estimate_generated_mesh(const GenerateSpec& s) {
       const double layer = 3 * a;
       const double shell = dim == 2 ? 2 * pi * (radius + layer / 2) * layer
                                     : 2 * pi * (radius + layer / 2) * layer * length;
-      part(per * shell / std::pow(a, dim) + refined_zone(dim, radius + layer, a, h) / 4,
+      part(per * shell / std::pow(a, dim) + refined_zone(dim, radius + layer, 2 * (radius + layer), 0.0, a, h) / 4,
            fmt::format("{} (walls sized by circle_segments = {} give elements of {:g} m)", what,
                        s.circle_segments, a),
            key);

@@ -13,6 +13,8 @@
 #include "cdem/analysis/blast_quality.hpp"
 #include "cdem/analysis/damage.hpp"
 #include "cdem/analysis/monitors.hpp"
+#include "cdem/analysis/reactions.hpp"
+#include "cdem/analysis/uplift.hpp"
 #include "cdem/core/error.hpp"
 #include "cdem/core/resources.hpp"
 #include "cdem/explosive/charges.hpp"
@@ -63,9 +65,25 @@ std::string describe_node(const Model& m, std::size_t n) {
                      m.block_elem_tag[b], m.region_names[m.block_region[b]], p.x, p.y, p.z);
 }
 
+// The energy scale below which the blow-up check does not compare: the strain energy the model
+// would hold at a uniform strain of 1e-8, 1/2 (1e-8)^2 sum E V over the blocks. Far above the
+// rounding noise of the energies (strains of 1e-16 at t = 0) and far below any physical state
+// (elastic waves in rock strain 1e-6 to 1e-3), and it scales with the model (the fixed 1e-9 J it
+// replaces was a few steps of free fall of a 13.6 t cylinder, and a real energy for a small 2D
+// test). 4.5e-5 J for the pile-pit model of SPEC 5.3.
+double energy_floor(const Model& m) {
+  double ev = 0;
+  for (std::size_t b = 0; b < m.n_blocks(); ++b)
+    ev += m.block_materials[m.block_material[b]].youngs * m.block_volume0[b];
+  return 0.5 * 1e-16 * ev;
+}
+
 // Returns a diagnosis when the state is not finite or the energy has blown up, else "".
+// Blow-up: the mechanical energy at t_n is more than `factor` x the energy put in up to t_n
+// (initial + works, gravity's being the potential drop sum m g . (x_n - X)), or x the floor
+// when less has been put in.
 std::string check_stability(const Simulation& sim, const EnergyBalance& e, double factor,
-                            double t) {
+                            double t, double floor) {
   const Model& m = sim.model();
   if (sim.inverted_blocks() > 0) {
     const auto b = sim.first_inverted();
@@ -88,15 +106,15 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
   }
   const double input = std::abs(e.initial) + std::abs(e.external_work) + std::abs(e.gravity_work) +
                        std::abs(e.explosive_work) + std::abs(e.insertion);
-  if (e.mechanical() > factor * input && e.mechanical() > 1e-9) {
+  if (e.mechanical() > factor * std::max(input, floor)) {
     std::size_t worst = 0;
     double vmax = -1;
     for (std::size_t n = 0; n < m.n_nodes(); ++n)
       if (norm(m.v[n]) > vmax) vmax = norm(m.v[n]), worst = n;
     return fmt::format("at t = {:.6g} s (step {}): energy blow-up: mechanical energy {:.4g} J is "
-                       "more than {} x the energy put in ({:.4g} J). Fastest node {} ({:.4g} m/s) "
-                       "in {}",
-                       t, sim.steps(), e.mechanical(), factor, input, worst, vmax,
+                       "more than {} x the energy put in ({:.4g} J; the model's floor {:.4g} J). "
+                       "Fastest node {} ({:.4g} m/s) in {}",
+                       t, sim.steps(), e.mechanical(), factor, input, floor, worst, vmax,
                        describe_node(m, worst));
   }
   return {};
@@ -136,6 +154,30 @@ void diagnose_time_step(const Model& m, const Case& c) {
                                "and no interfaces (only explosive blocks?)",
                                c.path));
 }
+
+namespace {
+// summary.json: the region names by index, the fracture degree per region, the largest
+// displacement along up (all blocks, and rock blocks only) and where.
+void add_region_and_uplift_summary(std::vector<std::pair<std::string, std::string>>& kv,
+                                   const Model& m, const UpliftTracker& uplift) {
+  std::string names = "[";
+  for (std::size_t r = 0; r < m.region_names.size(); ++r)
+    names += (r ? ", " : "") + json_string(m.region_names[r]);
+  kv.emplace_back("regions", names + "]");
+  const RegionFracture rf = fracture_degree_by_region(m);
+  std::string fr = "{";
+  for (std::size_t k = 0; k < rf.regions.size(); ++k)
+    fr += fmt::format("{}{}: {}", k ? ", " : "", json_string(m.region_names[rf.regions[k]]),
+                      json_number(rf.degree[k]));
+  kv.emplace_back("fracture_degree_regions", fr + "}");
+  const auto all = uplift.peak(m, false), rock = uplift.peak(m, true);
+  kv.emplace_back("max_up_displacement_m", json_number(all.value));
+  kv.emplace_back("max_up_displacement_point",
+                  fmt::format("[{}, {}, {}]", json_number(all.where.x), json_number(all.where.y),
+                              json_number(all.where.z)));
+  kv.emplace_back("max_up_displacement_rock_m", json_number(rock.value));
+}
+}  // namespace
 
 PreparedCase prepare_case(const Case& c, const Mesh& mesh) {
   check_case_against_mesh(c, mesh);
@@ -183,7 +225,10 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
                  c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), m.tied ? "tied" : "spring",
                  sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety, threads);
 
-  RunWriter out(opt.out_dir, c);
+  RunWriter out(opt.out_dir, c, &m);
+  ReactionMeter reactions(m, c);          // reactions.csv (constrained face sets)
+  UpliftTracker uplift(m, c);             // max displacement along up, per node and monitor
+  const double e_floor = energy_floor(m);
   std::FILE* charges_csv = nullptr;
   if (!bars.empty() || !solids.empty()) {
     charges_csv = std::fopen((std::filesystem::path(opt.out_dir) / "charges.csv").string().c_str(), "w");
@@ -221,21 +266,28 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   for (std::int64_t k = 0; k < steps_limit; ++k) {
     const double t_state = sim.time();  // the state after this step is at t_n = this time
     const bool hist = t_state >= next_hist - 0.5 * dt || k + 1 == steps_limit;
+    if (hist) reactions.before_step(m);
     sim.step(hist);
+    uplift.update(m);
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
     if (hist) {
       // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
       while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
       last = sim.energy();
       out.write_history(m, t_state, last, monitors);
+      uplift.sample_monitors(m, monitors, t_state);
+      if (!reactions.empty()) {
+        reactions.after_step(m, dt, t_state + 0.5 * dt);
+        out.write_reactions(t_state, reactions.face_sets(), reactions.forces());
+      }
       if (charges_csv) write_charge_rows(charges_csv, t_state, bars, solids);
       for (std::size_t q = 0; q < monitors.size(); ++q) {
         const double vm = von_mises(m.stress[monitors[q]]);
         if (vm > peak_vm[q].second) peak_vm[q].second = vm, peak_vm_time[q] = t_state;
       }
-      res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state);
+      res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state, e_floor);
       if (!res.diagnosis.empty()) {
-        out.write_fields(m, t_state);
+        out.write_fields(m, t_state, &uplift.per_node());
         out.flush();
         if (charges_csv) std::fflush(charges_csv);
         res.status = 3;
@@ -246,7 +298,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     }
     if (field || k + 1 == steps_limit) {
       while (next_field < field_times.size() && field_times[next_field] <= t_state + 0.5 * dt) ++next_field;
-      out.write_fields(m, t_state);
+      out.write_fields(m, t_state, &uplift.per_node());
       out.flush();
     }
     if (!opt.quiet) {
@@ -341,10 +393,13 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   kv.emplace_back("funnel_broken_volume", json_number(bq.funnel.broken_volume));
   std::string peaks = "{";
   for (std::size_t q = 0; q < monitors.size(); ++q)
-    peaks += fmt::format("{}{}: {{\"peak_von_mises\": {}, \"time\": {}}}", q ? ", " : "",
-                         json_string(c.monitors[q].name), json_number(peak_vm[q].second),
-                         json_number(peak_vm_time[q]));
+    peaks += fmt::format("{}{}: {{\"peak_von_mises\": {}, \"time\": {}, \"max_up_displacement\": {}, "
+                         "\"max_up_time\": {}}}",
+                         q ? ", " : "", json_string(c.monitors[q].name), json_number(peak_vm[q].second),
+                         json_number(peak_vm_time[q]), json_number(uplift.monitor_max()[q]),
+                         json_number(uplift.monitor_time()[q]));
   kv.emplace_back("monitors", peaks + "}");
+  add_region_and_uplift_summary(kv, m, uplift);
   write_json((std::filesystem::path(opt.out_dir) / "summary.json").string(), kv);
   if (!opt.quiet && res.status == 0)
     spdlog::info("finished: {} steps in {:.2f} s ({:.3g} block-steps/s), fracture degree {:.4f}, "

@@ -1,0 +1,46 @@
+#include "cdem/analysis/uplift.hpp"
+
+#include "cdem/analysis/monitors.hpp"
+
+namespace cdem {
+
+Vec3 up_direction(const Model& m, const Case& c) {
+  return norm(c.analysis.up) > 0 ? normalized(c.analysis.up)
+                                 : (m.dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+}
+
+UpliftTracker::UpliftTracker(const Model& m, const Case& c)
+    : up_(up_direction(m, c)),
+      max_up_(m.n_nodes(), 0.0),
+      mon_max_(c.monitors.size(), 0.0),
+      mon_time_(c.monitors.size(), 0.0) {}
+
+void UpliftTracker::update(const Model& m) {
+  const auto nn = static_cast<std::int64_t>(m.n_nodes());
+  const Vec3 up = up_;
+  double* mx = max_up_.data();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t n = 0; n < nn; ++n) {
+    const double u = dot(m.x[n] - m.X(static_cast<std::size_t>(n)), up);
+    if (u > mx[n]) mx[n] = u;
+  }
+}
+
+UpliftTracker::Peak UpliftTracker::peak(const Model& m, bool rock_only) const {
+  Peak p;
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    if (rock_only && !(m.block_materials[m.block_material[b]].rock_fraction() > 0)) continue;
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
+      if (max_up_[n] > p.value) p.value = max_up_[n], p.where = m.X(n);
+  }
+  return p;
+}
+
+void UpliftTracker::sample_monitors(const Model& m, const std::vector<std::int32_t>& blocks, double t) {
+  for (std::size_t k = 0; k < blocks.size() && k < mon_max_.size(); ++k) {
+    const double u = dot(sample_block(m, blocks[k]).displacement, up_);
+    if (u > mon_max_[k]) mon_max_[k] = u, mon_time_[k] = t;
+  }
+}
+
+}  // namespace cdem

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cdem/core/error.hpp"
+#include "mesh_test_files.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 
 namespace cdem {
@@ -21,19 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string data(const std::string& name) {
-  return std::string(CDEM_SOURCE_DIR) + "/tests/data/meshes/" + name;
-}
-
-// A fresh scratch directory per test.
-fs::path scratch_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  fs::path dir = fs::temp_directory_path() /
-                 (std::string("cdem_gmsh_io_") + std::to_string(::getpid()) + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using testing_files::data;
+fs::path scratch_dir() { return testing_files::scratch_dir("cdem_gmsh_io_"); }
 
 // Signed area (2D) or volume (3D) of element e.
 double measure(const Mesh& m, std::size_t e) {

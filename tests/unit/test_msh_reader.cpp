@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cdem/core/error.hpp"
+#include "mesh_test_files.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/mesh/msh_reader.hpp"
 #include "cdem/mesh/structured.hpp"
@@ -24,18 +25,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string data(const std::string& name) {
-  return std::string(CDEM_SOURCE_DIR) + "/tests/data/meshes/" + name;
-}
-
-fs::path scratch_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  fs::path dir = fs::temp_directory_path() /
-                 (std::string("cdem_msh_") + std::to_string(::getpid()) + "_" + info->name());
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using testing_files::data;
+fs::path scratch_dir() { return testing_files::scratch_dir("cdem_msh_"); }
 
 // The MeshError message of reading `text`, or "" when it reads.
 std::string error_of(const std::string& text) {

@@ -597,6 +597,17 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
   return sc;
 }
 
+namespace {
+// A block's signed volume (area in 2D) now over its initial one: <= 0 once it has inverted.
+double current_volume_ratio(const Model& m, std::size_t b) {
+  const auto n0 = m.block_first_node[b];
+  const int nn = nodes_of(m.block_type[b]);
+  Vec3 p[4];
+  for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
+  return signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
+}
+}  // namespace
+
 void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
   // Decks with a gas body (gas = cavity or cracks): one pressure per deck from the burnt
   // blocks' total volume (a collapsing block no longer gets the pressure of its own tiny volume).
@@ -604,12 +615,7 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
     std::fill(sc.gas.burnt_volume.begin(), sc.gas.burnt_volume.end(), 0.0);
     std::fill(sc.gas.cavity.begin(), sc.gas.cavity.end(), 0.0);
     for (std::size_t i = 0; i < sc.block.size(); ++i) {
-      const auto b = sc.block[i];
-      const auto n0 = m.block_first_node[b];
-      const int nn = nodes_of(m.block_type[b]);
-      Vec3 p[4];
-      for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
-      const double v = signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
+      const double v = current_volume_ratio(m, sc.block[i]);
       const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
       sc.gas.burnt_volume[sc.charge[i]] += lam * sc.v0[i];
       // a collapsed block has been let go with its products (booked as vented when it died)
@@ -620,11 +626,7 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
   sc.t_last = t;
   for (std::size_t i = 0; i < sc.block.size(); ++i) {
     const auto b = sc.block[i];
-    const auto n0 = m.block_first_node[b];
-    const int nn = nodes_of(m.block_type[b]);
-    Vec3 p[4];
-    for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
-    const double v = signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
+    const double v = current_volume_ratio(m, b);
     m.vol_ratio[b] = v;
     sc.v[i] = v;
     if (!sc.dead[i] && !(v > sc.min_volume_ratio)) {

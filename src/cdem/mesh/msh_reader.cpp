@@ -308,6 +308,21 @@ class Parser {
     return static_cast<int>(v);
   }
   double f64(const char* what) { return binary_ ? bin<double>(what) : double_token(what); }
+  // An entity block's head: MSH 4.1 writes its dimension then its tag, 4.0 the tag first.
+  std::pair<int, int> entity_block_head() {
+    if (version_ == Version::V41) {
+      const int dim = i32("an entity dimension");
+      return {dim, i32("an entity tag")};
+    }
+    const int etag = i32("an entity tag");
+    return {i32("an entity dimension"), etag};
+  }
+  // MSH 4.1's smallest and largest tag of a section (not needed: tags are checked one by one).
+  void skip_tag_range(const char* smallest, const char* largest) {
+    if (version_ != Version::V41) return;
+    (void)u64(smallest);
+    (void)u64(largest);
+  }
   // A node or element tag: size_t in 4.1, int elsewhere; >= 1 and within int64.
   std::uint64_t tag(const char* what) {
     const std::size_t before = pos_;
@@ -507,10 +522,7 @@ class Parser {
     const std::size_t at = pos_;
     const std::uint64_t nblocks = u64("the number of node blocks");
     const std::uint64_t n = u64("the number of nodes");
-    if (version_ == Version::V41) {
-      (void)u64("the smallest node tag");
-      (void)u64("the largest node tag");
-    }
+    skip_tag_range("the smallest node tag", "the largest node tag");
     const std::uint64_t per_node = binary_ ? tag_bytes() + 24 : 8;
     check_count(nblocks, 3 * int_bytes() + count_bytes(), "number of node blocks", at);
     check_count(n, per_node, "number of nodes", at);
@@ -518,14 +530,7 @@ class Parser {
     std::uint64_t total = 0;
     for (std::uint64_t b = 0; b < nblocks; ++b) {
       const std::size_t start = pos_;
-      int dim, etag;
-      if (version_ == Version::V41) {
-        dim = i32("an entity dimension");
-        etag = i32("an entity tag");
-      } else {
-        etag = i32("an entity tag");
-        dim = i32("an entity dimension");
-      }
+      const auto [dim, etag] = entity_block_head();
       (void)etag;
       if (dim < 0 || dim > 3)
         fail_at(start, binary_,
@@ -608,23 +613,13 @@ class Parser {
     const std::size_t at = pos_;
     const std::uint64_t nblocks = u64("the number of element blocks");
     const std::uint64_t n = u64("the number of elements");
-    if (version_ == Version::V41) {
-      (void)u64("the smallest element tag");
-      (void)u64("the largest element tag");
-    }
+    skip_tag_range("the smallest element tag", "the largest element tag");
     check_count(nblocks, 3 * int_bytes() + count_bytes(), "number of element blocks", at);
     check_count(n, 2 * tag_bytes(), "number of elements", at);
     std::uint64_t total = 0;
     for (std::uint64_t b = 0; b < nblocks; ++b) {
       const std::size_t start = pos_;
-      int dim, etag;
-      if (version_ == Version::V41) {
-        dim = i32("an entity dimension");
-        etag = i32("an entity tag");
-      } else {
-        etag = i32("an entity tag");
-        dim = i32("an entity dimension");
-      }
+      const auto [dim, etag] = entity_block_head();
       if (dim < 0 || dim > 3)
         fail_at(start, binary_,
                 fmt::format("element block {}: entity dimension {} (expected 0 to 3)", b + 1, dim));

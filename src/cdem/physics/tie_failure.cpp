@@ -15,6 +15,17 @@ struct FaceTraction {
   Vec3 ts;      // tangential traction (Pa)
 };
 
+// ½ (sigma_A + sigma_B) a: the mean of the two blocks' stresses (Sym6: xx, yy, zz, xy, yz, xz)
+// applied to the vector a (a unit normal, or an area vector for a traction times area).
+inline Vec3 mean_traction(const Model& m, std::int64_t i, const Vec3& a) {
+  const Sym6& sa = m.stress[m.iface_block_a[i]];
+  const Sym6& sb = m.stress[m.iface_block_b[i]];
+  const double xx = 0.5 * (sa[0] + sb[0]), yy = 0.5 * (sa[1] + sb[1]), zz = 0.5 * (sa[2] + sb[2]);
+  const double xy = 0.5 * (sa[3] + sb[3]), yz = 0.5 * (sa[4] + sb[4]), xz = 0.5 * (sa[5] + sb[5]);
+  return {xx * a.x + xy * a.y + xz * a.z, xy * a.x + yy * a.y + yz * a.z,
+          xz * a.x + yz * a.y + zz * a.z};
+}
+
 FaceTraction face_traction(const Model& m, std::int64_t i) {
   const int np = m.springs_per_iface;
   const std::int64_t s0 = i * np;
@@ -27,13 +38,7 @@ FaceTraction face_traction(const Model& m, std::int64_t i) {
                   face_area_vector(std::span<const Vec3>(pb, np), np);
   const double a2 = dot(av, av);
   const Vec3 n = a2 > 0 ? (1.0 / std::sqrt(a2)) * av : Vec3{};
-  const Sym6& sa = m.stress[m.iface_block_a[i]];
-  const Sym6& sb = m.stress[m.iface_block_b[i]];
-  // Sym6: xx, yy, zz, xy, yz, xz
-  const double xx = 0.5 * (sa[0] + sb[0]), yy = 0.5 * (sa[1] + sb[1]), zz = 0.5 * (sa[2] + sb[2]);
-  const double xy = 0.5 * (sa[3] + sb[3]), yz = 0.5 * (sa[4] + sb[4]), xz = 0.5 * (sa[5] + sb[5]);
-  const Vec3 t{xx * n.x + xy * n.y + xz * n.z, xy * n.x + yy * n.y + yz * n.z,
-               xz * n.x + yz * n.y + zz * n.z};
+  const Vec3 t = mean_traction(m, i, n);
   const double tn = dot(t, n);
   return {n, tn, t - tn * n};
 }
@@ -96,12 +101,7 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
       const Vec3 e = p1 - p0;
       a = {e.y, -e.x, 0.0};
     }
-    const Sym6& sa = m.stress[m.iface_block_a[i]];
-    const Sym6& sb = m.stress[m.iface_block_b[i]];
-    const double xx = 0.5 * (sa[0] + sb[0]), yy = 0.5 * (sa[1] + sb[1]), zz = 0.5 * (sa[2] + sb[2]);
-    const double xy = 0.5 * (sa[3] + sb[3]), yz = 0.5 * (sa[4] + sb[4]), xz = 0.5 * (sa[5] + sb[5]);
-    const Vec3 ta{xx * a.x + xy * a.y + xz * a.z, xy * a.x + yy * a.y + yz * a.z,
-                  xz * a.x + yz * a.y + zz * a.z};
+    const Vec3 ta = mean_traction(m, i, a);
     const double aa = dot(a, a);
     if (!(aa > 0)) continue;
     const double inv = 1.0 / aa;

@@ -1068,6 +1068,8 @@ def main(argv=None):
     ap.add_argument("file", help="the study file (TOML)")
     ap.add_argument("--out", help="the study directory (default: [study] out, else runs/<file name>)")
     ap.add_argument("--threads", type=int, help="OpenMP threads of every run")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="an override of every variant's case, after [study] set (repeatable)")
     ap.add_argument("--no-run", action="store_true", help="compare the runs already in the directory")
     ap.add_argument("--bin", help="the cdemblast binary (default: $CDEM_BIN, else build/bin/cdemblast)")
     ap.add_argument("--no-pictures", action="store_true", help="tables and JSON only")
@@ -1076,7 +1078,7 @@ def main(argv=None):
     if args.threads is not None and args.threads < 0:
         ap.error("--threads must be >= 0")
     try:
-        study = Study(args.file, args.out)
+        study = Study(args.file, args.out, args.set)
         if not args.no_run:
             run_study(study, find_binary(args.bin), args.threads, verbose=args.verbose)
         res = compare(study, pictures=not args.no_pictures)

@@ -261,6 +261,9 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   EnergyBalance last{};
   const bool tty = isatty(2) && !opt.quiet;
   auto last_print = Clock::now();
+  // Wall time per step kernel (summary.json kernel_time_s; a few clock reads per step).
+  StepTimes kernel_times;
+  sim.set_timer(&kernel_times);
   const auto loop0 = Clock::now();
 
   for (std::int64_t k = 0; k < steps_limit; ++k) {
@@ -367,6 +370,17 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"collapsed_explosive_blocks", std::to_string(solids.dead_count)},
       {"field_outputs", std::to_string(out.field_outputs())},
   };
+  {  // where the loop's time went: each step kernel, and the rest (analysis, outputs, samples)
+    std::string kt = "{";
+    double in_step = 0;
+    for (int k = 0; k < kNumStepKernels; ++k) {
+      kt += fmt::format("{}{}: {}", k ? ", " : "", json_string(kStepKernelNames[k]),
+                        json_number(kernel_times.s[k]));
+      in_step += kernel_times.s[k];
+    }
+    kt += fmt::format(", \"outside_step\": {}}}", json_number(std::max(0.0, loop_s - in_step)));
+    kv.emplace_back("kernel_time_s", kt);
+  }
   // Blasting quality of the final state: fragments, grading (main rock mass excluded), funnel.
   const BlastQuality bq = blast_quality(m, c);
   {

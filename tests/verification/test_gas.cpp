@@ -65,7 +65,7 @@ TEST(GasBody, FreeExpansionFollowsTheAdiabat) {
   b.v0 = 1e-3;
   g.bodies = {b};
   Model m;  // no interfaces: no cracks
-  init_gas_field(m, g);
+  init_gas_field(m, g, {});
   AppliedLoads out;
   double worst = 0;
   const int n = 8000;

@@ -86,6 +86,17 @@ void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
   for (int i = 0; i < nn; ++i) out.add(m, n0 + i, fn[i]);
 }
 
+namespace {
+// The face sets the gas cannot vent through: those under a fixed, roller, non-reflecting or
+// velocity condition (more rock or a wall beyond); free and pressure-loaded faces vent.
+std::vector<std::string> closed_face_sets(const Case& c) {
+  std::vector<std::string> out;
+  for (const auto& b : c.boundaries)
+    if (b.type != BoundaryType::Pressure) out.push_back(b.faces);
+  return out;
+}
+}  // namespace
+
 BarCharges build_bar_charges(const Model& m, const Case& c) {
   BarCharges bc;
   std::vector<std::string> eos_names;
@@ -305,7 +316,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     }
     bc.elem_bar_offset.push_back(static_cast<std::int32_t>(bc.elem_bar.size()));
   }
-  init_gas_field(m, bc.gas);
+  init_gas_field(m, bc.gas, closed_face_sets(c));
   // The gas starts in the blocks that hold the charge; where the charge fills its blocks (phi >=
   // 0.5: charge blocks, glued to their neighbours) the cavity's wall is the neighbours' faces.
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i)
@@ -585,7 +596,7 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
                                    "inside it; mesh the charge as a region whose material has "
                                    "'explosive' set",
                                    c.path, sc.charges[k].hole, sc.charges[k].deck + 1));
-  init_gas_field(m, sc.gas);
+  init_gas_field(m, sc.gas, closed_face_sets(c));
   for (std::size_t i = 0; i < sc.block.size(); ++i) {
     seed_gas(m, sc.gas, sc.block[i], sc.charge[i], true);
     sc.gas.bodies[sc.charge[i]].v0 += sc.v0[i];

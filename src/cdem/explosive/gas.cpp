@@ -37,15 +37,21 @@ bool advance_plug(double& x, double& v, double p, double a, double c, double len
   return x >= length;
 }
 
-void init_gas_field(const Model& m, GasField& g) {
+void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>& closed_sets) {
   g.iface_fill.assign(m.n_ifaces(), 0.0f);
   g.iface_gas_p.assign(m.n_ifaces(), 0.0f);
   g.iface_body.assign(m.n_ifaces(), -1);
   g.block_body.assign(m.n_blocks(), -1);
   g.block_exterior.assign(m.n_blocks(), 0);
-  for (std::size_t b = 0; b < m.n_blocks(); ++b)
-    g.block_exterior[b] = m.block_iface_offset[b + 1] - m.block_iface_offset[b] <
-                          local_faces(m.block_type[b]).count;
+  std::vector<int> closed(m.n_blocks(), 0);  // boundary faces of the block in closed sets
+  for (const auto& name : closed_sets)
+    if (const auto* set = m.facet_set(name))
+      for (const auto& f : set->facets) ++closed[static_cast<std::size_t>(f.block)];
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    const int outer = local_faces(m.block_type[b]).count -
+                      (m.block_iface_offset[b + 1] - m.block_iface_offset[b]);
+    g.block_exterior[b] = outer > closed[b];
+  }
   g.burnt_volume.assign(g.bodies.size(), 0.0);
   g.cavity.assign(g.bodies.size(), 0.0);
   g.scratch.assign(2 * g.bodies.size(), 0.0);

@@ -85,8 +85,10 @@ struct GasField {
   }
 };
 
-// Sizes the per-interface and per-block arrays of `g` for model m (bodies already added).
-void init_gas_field(const Model& m, GasField& g);
+// Sizes the per-interface and per-block arrays of `g` for model m (bodies already added). A block is exterior (its gas vents) when it has a
+// boundary face outside the face sets in `closed_sets`: the faces under a fixed, roller,
+// non-reflecting or velocity condition are rock or a wall beyond the model, not a free surface.
+void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>& closed_sets);
 
 // Seeds body k's gas in block b and, when `wall` is set, in b's face neighbours (the cavity's
 // wall when the charge fills b).

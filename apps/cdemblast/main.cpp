@@ -2,7 +2,7 @@
 //   cdemblast run CASE [--out DIR] [--threads N] [--set key=value]...
 //   cdemblast check CASE [--set key=value]...
 //   cdemblast report RUN... [--out DIR]
-//   cdemblast study FILE [--out DIR] [--threads N] [--no-run]
+//   cdemblast study FILE [--out DIR] [--threads N] [--no-run] [--set KEY=VALUE ...] [-v]
 //   cdemblast --version
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -130,7 +130,7 @@ int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
 
 // A study (docs/study.md): the variants are run by this very program (--bin).
 int cmd_study(const std::string& file, const std::string& out, int threads, bool no_run,
-              const char* argv0) {
+              const std::vector<std::string>& sets, bool verbose, const char* argv0) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -139,6 +139,8 @@ int cmd_study(const std::string& file, const std::string& out, int threads, bool
   if (!out.empty()) args.insert(args.end(), {"--out", out});
   if (threads > 0) args.insert(args.end(), {"--threads", std::to_string(threads)});
   if (no_run) args.push_back("--no-run");
+  for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+  if (verbose) args.push_back("-v");
   return run_python("CDEM_STUDY_SCRIPT", "cdem_study.py", args);
 }
 
@@ -174,13 +176,17 @@ int main(int argc, char** argv) {
 
   std::string study_file, study_out;
   int study_threads = 0;
-  bool study_no_run = false;
+  bool study_no_run = false, study_verbose = false;
+  std::vector<std::string> study_sets;
   auto* study = app.add_subcommand("study", "Run the variants of a study file and compare them (docs/study.md)");
   study->add_option("file", study_file, "Study file (TOML)")->required();
   study->add_option("--out,-o", study_out, "Study directory (default: the file's [study] out)");
   study->add_option("--threads,-t", study_threads, "OpenMP threads of every run")
       ->check(CLI::Range(0, 4096).description("an integer >= 0"));
   study->add_flag("--no-run", study_no_run, "Compare the runs already in the directory");
+  study->add_option("--set", study_sets, "Override a key of every variant's case, after [study] set")
+      ->allow_extra_args(false);
+  study->add_flag("--verbose,-v", study_verbose, "Show the runs' progress");
 
   cdem::BenchOptions bench_opt;
   auto* bench = app.add_subcommand("bench", "Time the step on a 3D tet model: throughput, kernel split, memory, scaling");
@@ -208,7 +214,8 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(case_path, sets);
     if (*report) return cmd_report(report_runs, report_out);
-    if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, argv[0]);
+    if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets,
+                                   study_verbose, argv[0]);
     if (*bench) return cdem::run_bench(bench_opt);
     const cdem::Case c = cdem::load_case(case_path, sets);
     if (out_dir.empty()) out_dir = (std::filesystem::path("runs") / std::filesystem::path(case_path).stem()).string();

@@ -93,6 +93,7 @@ struct ContactSet {
   std::vector<std::int32_t> node_start;  // start of each distinct node's pairs (+ end)
   // block side: entries (4 p + i) per block node, CSR over distinct block nodes
   std::vector<std::int32_t> fnode, fnode_offset, fnode_entry;
+  std::vector<std::int32_t> node_slot;  // rebuild: per node its entry count, then its fnode index
   // work space of the rebuild
   std::vector<std::int32_t> body, bucket_offset, bucket_entry, scratch;
   std::vector<std::uint8_t> on_released;

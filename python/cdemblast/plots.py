@@ -571,6 +571,54 @@ def plot_fracture(runs, out_dir, written):
     return save(fig, out_dir, "fracture.png", written)
 
 
+def plot_charges(runs, out_dir, written):
+    """charges.csv: the gas pressure of every deck against time (log), and the products' mass
+    in the charges, in cracks and vented, summed over the decks. None without charges."""
+    runs_with = [r for r in runs if r.charges]
+    if not runs_with:
+        return None
+    tmax = max(float(c["time"].max()) for r in runs_with for c in r.charges.values() if c["time"].size)
+    tf, tu = time_scale(tmax)
+    per_m = " per metre" if any(r.per_metre for r in runs_with) else ""
+    fig, (ax_p, ax_m) = plt.subplots(1, 2, figsize=(14, 5), constrained_layout=True)
+    styles = ["-", "--", ":", "-."]
+    colors = run_colors(len(runs_with))
+    for i, r in enumerate(runs_with):
+        decks = [(hole, deck, cols) for hole, cols in r.charges.items() for deck in np.unique(cols["deck"])]
+        dcolors = run_colors(len(decks)) if len(runs_with) == 1 else [colors[i]] * len(decks)
+        mass = {}
+        for j, (hole, deck, cols) in enumerate(decks):
+            sel = cols["deck"] == deck
+            t, p = cols["time"][sel], cols["pressure"][sel]
+            if t.size == 0:
+                continue
+            lab = f"{hole} deck {int(deck)}" + (f" ({r.label})" if len(runs_with) > 1 else "")
+            ls = styles[j % len(styles)] if len(runs_with) > 1 else "-"  # several runs: style per deck
+            ax_p.semilogy(t * tf, np.maximum(p, 1e3), color=dcolors[j], ls=ls, lw=1.2,
+                          label=lab if len(decks) <= 16 else None)
+            for col in ("gas_mass_charge", "gas_mass_cracks", "vented_mass"):
+                if col in cols:
+                    v = cols[col][sel]
+                    if col in mass and mass[col][0].size == t.size:
+                        mass[col] = (t, mass[col][1] + v)
+                    elif col not in mass:
+                        mass[col] = (t, v.copy())
+        names = {"gas_mass_charge": "in the charges", "gas_mass_cracks": "in cracks", "vented_mass": "vented"}
+        for k, (col, (t, v)) in enumerate(mass.items()):
+            ax_m.plot(t * tf, v, color=colors[i] if len(runs_with) > 1 else f"C{k}", ls=styles[k % 3],
+                      label=names[col] + (f" ({r.label})" if len(runs_with) > 1 else ""))
+    ax_p.set(xlabel=f"time ({tu})", ylabel="gas pressure (Pa)", xlim=(0, tmax * tf),
+             title="Deck gas pressure (floored at 1 kPa on the log axis)")
+    ax_m.set(xlabel=f"time ({tu})", ylabel=f"products (kg{per_m})", xlim=(0, tmax * tf),
+             title="Detonation products: in the charges, in cracks, vented (all decks)")
+    ax_m.set_ylim(bottom=0)
+    for a in (ax_p, ax_m):
+        a.grid(alpha=0.3)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=7, loc="best")
+    return save(fig, out_dir, "charges.png", written)
+
+
 ENERGY_TERMS = [
     ("kinetic", "kinetic", "tab:blue", "-"),
     ("block_strain", "block strain", "tab:orange", "-"),

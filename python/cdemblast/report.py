@@ -20,7 +20,7 @@ import numpy as np
 
 from . import checks, yardsticks
 from .plots import (MAX_FRAMES, choose_frames, compare_damage, last_frame, load_frames,
-                    plot_3d_views, plot_damage_final, plot_energy, plot_field_grid,
+                    plot_3d_views, plot_charges, plot_damage_final, plot_energy, plot_field_grid,
                     plot_fracture, plot_fragments_final, plot_grading, plot_monitors, plot_ppv,
                     plt)
 from .run import Run, finite, read_toml, unique_labels
@@ -207,6 +207,9 @@ CAPTIONS = {
     "energy.png": "Energy balance: the stored, input and dissipated energy terms, and the relative "
                   "balance error (log scale). When the explosive work falls after its peak, the "
                   "legend says so: the rock then does work on the products.",
+    "charges.png": "The charges' gas (charges.csv): the pressure of every deck against time, and "
+                   "the detonation products' mass in the charges, in cracks and vented, summed "
+                   "over the decks.",
     "grading.png": "Fragment size grading: cumulative volume percentage passing against the "
                    "characteristic size L_bc, with d40 and d80 marked (and the Kuz-Ram and "
                    "Swebrec curves of the design when one is given).",
@@ -699,6 +702,7 @@ def main(argv=None):
                  out_dir, written)
     failures.run("fracture.png", notes, plot_fracture, runs, out_dir, written)
     failures.run("energy.png", notes, plot_energy, runs, out_dir, written)
+    failures.run("charges.png", notes, plot_charges, runs, out_dir, written)
     failures.run("grading.png", notes, plot_grading, runs, out_dir, written, notes, kuzram)
     if multi:
         failures.run("damage_final_compare.png", notes, compare_damage, runs, out_dir, written, notes, args)

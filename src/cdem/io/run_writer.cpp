@@ -96,7 +96,8 @@ void RunWriter::write_reactions(double t, const std::vector<std::string>& face_s
                  force[k].z);
 }
 
-void RunWriter::write_fields(const Model& m, double t, const std::vector<double>* max_up) {
+void RunWriter::write_fields(const Model& m, double t, const std::vector<double>* max_up,
+                             const std::vector<float>* gas_pressure) {
   const std::string name = fmt::format("{:04d}", frame_++);
   // ---- blocks, each with its own nodes (cracks open as gaps) ----
   VtuMesh vm;
@@ -158,6 +159,8 @@ void RunWriter::write_fields(const Model& m, double t, const std::vector<double>
   VtuMesh cm;
   cm.time = t;
   VtuArray cmode{"mode", 1, {}, {}, VtuType::kInt32}, cfrac{"broken_fraction", 1, {}, {}}, ctime{"break_time", 1, {}, {}};
+  VtuArray cgas{"gas_pressure", 1, {}, {}};
+  const bool has_gas = gas_pressure && gas_pressure->size() == m.n_ifaces();
   const int np = m.springs_per_iface;
   for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
     int broken = 0, shear = 0;
@@ -179,8 +182,9 @@ void RunWriter::write_fields(const Model& m, double t, const std::vector<double>
     cmode.i32.push_back(2 * shear > broken ? 2 : 1);
     cfrac.f64.push_back(static_cast<double>(broken) / np);
     ctime.f64.push_back(tb);
+    cgas.f64.push_back(has_gas ? static_cast<double>((*gas_pressure)[i]) : 0.0);
   }
-  cm.cell_data = {std::move(cmode), std::move(cfrac), std::move(ctime)};
+  cm.cell_data = {std::move(cmode), std::move(cfrac), std::move(ctime), std::move(cgas)};
   const std::string crel = "cracks/cracks_" + name + ".vtu";
   write_vtu((fs::path(dir_) / crel).string(), cm);
   cracks_pvd_->add(t, crel);

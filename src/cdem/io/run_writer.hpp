@@ -3,7 +3,7 @@
 //   fields.pvd + fields/fields_NNNN.vtu   blocks (own nodes): displacement, velocity, stress,
 //                        pressure, von Mises, damage, damage mode, region, fragment id
 //   cracks.pvd + cracks/cracks_NNNN.vtu   broken interface faces: mode, broken fraction,
-//                        time of breaking
+//                        time of breaking, gas pressure on the faces
 //   monitors.csv, energy.csv, fracture.csv   time histories (fracture.csv also per region:
 //                        degree_area_<region>, with the model given to the constructor)
 //   reactions.csv        reaction forces per constrained face set (write_reactions)
@@ -31,8 +31,10 @@ class RunWriter {
   RunWriter& operator=(const RunWriter&) = delete;
 
   // `max_up`: per node, the largest displacement along up so far (point array
-  // max_up_displacement; UpliftTracker).
-  void write_fields(const Model& m, double t, const std::vector<double>* max_up = nullptr);
+  // max_up_displacement; UpliftTracker). `gas_pressure`: per interface, the charges' gas
+  // pressure on its faces (Pa; crack cell array gas_pressure, 0 where none or when null).
+  void write_fields(const Model& m, double t, const std::vector<double>* max_up = nullptr,
+                    const std::vector<float>* gas_pressure = nullptr);
   // reactions.csv rows (time, face_set, fx, fy, fz), one per face set; the file is created at
   // the first call.
   void write_reactions(double t, const std::vector<std::string>& face_sets, const std::vector<Vec3>& force);

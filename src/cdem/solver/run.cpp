@@ -261,6 +261,19 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   EnergyBalance last{};
   const bool tty = isatty(2) && !opt.quiet;
   auto last_print = Clock::now();
+  // The charges' gas pressure on the crack faces, per interface (the larger of the bar and the
+  // solid charges' gas fields), for the cracks VTU.
+  std::vector<float> crack_gas;
+  auto gas_on_cracks = [&]() -> const std::vector<float>* {
+    const auto& a = bars.gas.iface_gas_p;
+    const auto& b = solids.gas.iface_gas_p;
+    if (a.empty() && b.empty()) return nullptr;
+    crack_gas.assign(m.n_ifaces(), 0.0f);
+    for (const auto* g : {&a, &b})
+      if (g->size() == crack_gas.size())
+        for (std::size_t i = 0; i < crack_gas.size(); ++i) crack_gas[i] = std::max(crack_gas[i], (*g)[i]);
+    return &crack_gas;
+  };
   // Wall time per step kernel (summary.json kernel_time_s; a few clock reads per step).
   StepTimes kernel_times;
   sim.set_timer(&kernel_times);
@@ -290,7 +303,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       }
       res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state, e_floor);
       if (!res.diagnosis.empty()) {
-        out.write_fields(m, t_state, &uplift.per_node());
+        out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
         out.flush();
         if (charges_csv) std::fflush(charges_csv);
         res.status = 3;
@@ -301,7 +314,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     }
     if (field || k + 1 == steps_limit) {
       while (next_field < field_times.size() && field_times[next_field] <= t_state + 0.5 * dt) ++next_field;
-      out.write_fields(m, t_state, &uplift.per_node());
+      out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
       out.flush();
     }
     if (!opt.quiet) {

@@ -259,7 +259,8 @@ TEST(ContactFast, FragmentAt200MetresPerSecond) {
 }
 
 // The rebuild trigger itself: a candidate node moved by 0.49 skin leaves the list; by 0.51 skin
-// it is rebuilt at the next contact_forces call.
+// it is rebuilt at the next contact_forces call; released points rebuild once the relative
+// motion bound since the release passes 0.1 skin.
 TEST(ContactFast, RebuildTrigger) {
   const auto mat = rock();
   const auto glue = interface_of(InterfaceLaw::Elastic);
@@ -277,9 +278,21 @@ TEST(ContactFast, RebuildTrigger) {
   m.x[n].x += 0.02 * cfg.skin;  // now 0.51 skin from where it was at the build
   contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 2);
-  ++m.released_points;  // a released point: the candidates change
+  // A released point: its faces become candidates once the nodes may have moved towards each
+  // other by 0.1 skin since (2 max|v| dt per step). At rest: no rebuild, whatever the steps.
+  ++m.released_points;
+  for (int k = 0; k < 5; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 2);
+  // Moving at 100 m/s, dt = 1e-6 s: 2e-4 m = 0.02 skin per step: 0.10 skin after 5 steps, beyond
+  // at the 6th (the bound may have grown by a hair less than 0.1 skin at the 5th by rounding).
+  for (std::size_t q = 0; q < m.n_nodes(); ++q) m.v[q] = Vec3{0.0, 0.0, 0.0};
+  m.v[n] = Vec3{100.0, 0.0, 0.0};
+  for (int k = 0; k < 4; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 2) << "rebuilt before the nodes could have moved 0.1 skin";
   contact_forces(m, cs, 1e-6);
-  EXPECT_EQ(cs.rebuilds, 3);
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 3) << "not rebuilt once the nodes could have moved 0.1 skin";
+  EXPECT_EQ(cs.release_drift, 0.0);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -293,6 +293,7 @@ void rebuild(Model& m, ContactSet& cs) {
     }
   }
   cs.released_seen = m.released_points;
+  cs.release_drift = 0;
 }
 
 }  // namespace
@@ -381,8 +382,26 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
 
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
-  // Rebuild when points were released or a candidate node has moved more than skin / 2.
-  bool due = cs.released_seen != m.released_points;
+  // Rebuild when a candidate node has moved more than skin / 2, or when points were released
+  // (their faces become candidates) once the nodes may have moved towards each other by
+  // kReleaseDrift x skin since the release: at most 2 max|v| dt per step. Until then no node
+  // can have come nearer a released face than that, so a contact found late overlaps it by at
+  // most this (10 % of the skin); a breaking model releases points nearly every step, and a
+  // rebuild at each cost most of its step.
+  constexpr double kReleaseDrift = 0.1;
+  bool due = false;
+  if (cs.released_seen != m.released_points) {
+    if (cs.released_seen < 0) {
+      due = true;  // the first build
+    } else {
+      const auto nn = static_cast<std::int64_t>(m.n_nodes());
+      double v2 = 0;
+#pragma omp parallel for schedule(static) reduction(max : v2)
+      for (std::int64_t n = 0; n < nn; ++n) v2 = std::max(v2, dot(m.v[n], m.v[n]));
+      cs.release_drift += 2.0 * std::sqrt(v2) * dt;
+      due = cs.release_drift > kReleaseDrift * cs.skin;
+    }
+  }
   if (!due) {
     const auto nc = static_cast<std::int64_t>(cs.cand_nodes.size());
     const double lim2 = 0.25 * cs.skin * cs.skin;

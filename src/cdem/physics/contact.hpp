@@ -101,6 +101,8 @@ struct ContactSet {
 
   // ---- state and statistics ----
   std::int64_t released_seen = -1;       // Model::released_points at the last build
+  double release_drift = 0;              // since points were released after the last build:
+                                         // the bound sum 2 max|v| dt on any relative motion (m)
   double diss_closed = 0;                // dissipation of pairs dropped at rebuilds (J)
   std::int64_t rebuilds = 0, active = 0, active_max = 0;
   double max_pen_ratio = 0;              // max over the run of penetration / face block size

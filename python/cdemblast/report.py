@@ -377,6 +377,23 @@ def compact_setup_rows(setups):
 
 
 # ----------------------------------------------------------------------------- documents
+def record_warnings(run, warns):
+    """Writes the run's warnings (measured here, and its own) into its summary.json as
+    `warnings`: a list of {code, message, value, limit}. Read back by the next report, the
+    measured ones are not repeated (checks.merge), so the list stays the same. The file is
+    replaced atomically; a run without a summary.json is left alone."""
+    path = os.path.join(run.dir, "summary.json")
+    if not run.summary or not os.path.isfile(path):
+        return
+    data = dict(run.summary)
+    data["warnings"] = [{k: w.get(k) for k in ("code", "message", "value", "limit")} for w in warns]
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(jsonable(data), f, indent=1)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
 def warning_lines(per_run, multi):
     """[(run label or None, message)] of every run's warnings."""
     out = []
@@ -715,6 +732,8 @@ def main(argv=None):
     order = list(CAPTIONS)
     pictures = sorted(dict.fromkeys(written), key=lambda p: order.index(p) if p in order else 99)
     write_documents(runs, out_dir, pictures, notes, setups, per_run_warnings, ppv, kuzram)
+    for r, (_lab, w) in zip(runs, per_run_warnings):
+        failures.run(f"warnings into {r.label}'s summary.json", notes, record_warnings, r, w)
     report = {
         "runs": [{"label": r.label, "dir": r.dir, "summary": r.summary,
                   "setup": st.to_json() if st is not None else None,

@@ -187,6 +187,10 @@ codes = {w["code"] for w in rj["warnings"]}
 for code in ("powder_factor", "charge_larger_than_block"):
     if code not in codes:
         errors.append(f"{bar}/report.json: warning '{code}' did not fire ({sorted(codes)})")
+# ... and the same warnings in the run's summary.json (issue 18: listed there as `warnings`).
+sj = json.load(open(os.path.join(tmp, "bar", "summary.json")))
+if {w.get("code") for w in sj.get("warnings") or []} != codes:
+    errors.append(f"{tmp}/bar/summary.json: warnings {sj.get('warnings')} are not the report's {sorted(codes)}")
 st = rj["runs"][0]["setup"]
 if abs(st["charge_mass_kg"] - 1150 * 0.1 * 0.5) > 1e-6 or not st["per_metre"]:
     errors.append(f"{bar}/report.json: charge {st['charge_mass_kg']} kg/m, expected 57.5 kg/m")

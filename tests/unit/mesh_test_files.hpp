@@ -5,6 +5,9 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include "cdem/mesh/gmsh_io.hpp"
 
 namespace cdem::testing_files {
 
@@ -22,6 +25,22 @@ inline std::filesystem::path scratch_dir(const std::string& prefix) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+// Two generated meshes to write and read back: a 2D quad rectangle with a slot hole (element
+// size h2d) and a 3D tet box.
+inline std::vector<GenerateSpec> round_trip_specs(double h2d) {
+  GenerateSpec s2;
+  s2.shape = "rectangle";
+  s2.size = {2, 1, 0};
+  s2.element_size = h2d;
+  s2.quads = true;
+  s2.holes = {HoleSpec{{1, 1, 0}, 0.05, {0, -1, 0}, 0.4, "charge"}};
+  GenerateSpec s3;
+  s3.shape = "box";
+  s3.size = {1, 0.5, 0.5};
+  s3.element_size = 0.25;
+  return {s2, s3};
 }
 
 }  // namespace cdem::testing_files

@@ -294,17 +294,7 @@ TEST(GmshWrite, RoundTripHandMadeMesh) {
 
 TEST(GmshWrite, RoundTripGeneratedMeshes) {
   const fs::path dir = scratch_dir();
-  GenerateSpec s2;
-  s2.shape = "rectangle";
-  s2.size = {2, 1, 0};
-  s2.element_size = 0.2;
-  s2.quads = true;
-  s2.holes = {HoleSpec{{1, 1, 0}, 0.05, {0, -1, 0}, 0.4, "charge"}};
-  GenerateSpec s3;
-  s3.shape = "box";
-  s3.size = {1, 0.5, 0.5};
-  s3.element_size = 0.25;
-  for (const GenerateSpec& s : {s2, s3}) {
+  for (const GenerateSpec& s : testing_files::round_trip_specs(0.2)) {
     const Mesh m = generate_mesh(s);
     const std::string path = (dir / (s.shape + ".msh")).string();
     write_gmsh(m, path);

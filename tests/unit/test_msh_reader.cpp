@@ -97,18 +97,8 @@ std::string square_v22(const std::string& nodes = "", const std::string& element
 // Every format libgmsh 4.8 writes (2.2 and 4.1 ASCII and binary, 4.0 ASCII) gives the generated
 // mesh back; MSH 2.2 renumbers the elements 1..n (Gmsh's writer), the others keep the tags.
 TEST(MshReader, EveryFormatGmshWritesReadsBack) {
-  GenerateSpec s2;
-  s2.shape = "rectangle";
-  s2.size = {2, 1, 0};
-  s2.element_size = 0.25;
-  s2.quads = true;
-  s2.holes = {HoleSpec{{1, 1, 0}, 0.05, {0, -1, 0}, 0.4, "charge"}};
-  GenerateSpec s3;
-  s3.shape = "box";
-  s3.size = {1, 0.5, 0.5};
-  s3.element_size = 0.25;
   const fs::path dir = scratch_dir();
-  for (const GenerateSpec& s : {s2, s3}) {
+  for (const GenerateSpec& s : testing_files::round_trip_specs(0.25)) {
     const Mesh m = generate_mesh(s);
     for (double version : {2.2, 4.0, 4.1})
       for (bool binary : {false, true}) {

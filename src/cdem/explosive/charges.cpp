@@ -89,6 +89,19 @@ void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
 namespace {
 // The face sets the gas cannot vent through: those under a fixed, roller, non-reflecting or
 // velocity condition (more rock or a wall beyond); free and pressure-loaded faces vent.
+// The top deck's gas body: the collar plug is the stemming above that deck (its length, mass
+// and wall shear strength).
+void set_collar_plug(GasBody& gb, const HoleDef& h, double section) {
+  const Vec3 up = normalized(h.collar - h.end);
+  const double top = dot(h.decks.back().top - h.end, up);
+  double len = 0;
+  for (const auto& st : h.stemming)
+    if (st.first >= top - 1e-9) len += st.second - st.first;
+  gb.plug_length = len;
+  gb.plug_mass = h.stemming_density * section * len;
+  gb.plug_shear = h.stemming_shear_strength;
+}
+
 std::vector<std::string> closed_face_sets(const Case& c) {
   std::vector<std::string> out;
   for (const auto& b : c.boundaries)
@@ -259,17 +272,9 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
         gb.v0 = section * bar.length;
         gb.section = section;
         gb.vent_cd = hole.vent_coefficient;
-        // the collar stemming above the hole's top deck
-        const Vec3 up = normalized(hole.collar - hole.end);
-        const double top = dot(deck.top - hole.end, up);
         if (di + 1 == hole.decks.size()) {
-          double len = 0;
-          for (const auto& st : hole.stemming)
-            if (st.first >= top - 1e-9) len += st.second - st.first;
-          gb.plug_length = len;
-          gb.plug_mass = hole.stemming_density * section * len;
-          gb.plug_shear = hole.stemming_shear_strength;
-          gb.collar_open = len <= 1e-9 * hole.length();
+          set_collar_plug(gb, hole, section);
+          gb.collar_open = gb.plug_length <= 1e-9 * hole.length();
         }
         bc.gas.bodies.push_back(gb);
       }
@@ -539,16 +544,7 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
       const double section = m.dim == 3 ? kPi * 0.25 * h.diameter * h.diameter : h.diameter;
       gb.section = section;
       gb.vent_cd = h.vent_coefficient;
-      if (d + 1 == h.decks.size()) {
-        const Vec3 up = normalized(h.collar - h.end);
-        const double top = dot(h.decks[d].top - h.end, up);
-        double len = 0;
-        for (const auto& st : h.stemming)
-          if (st.first >= top - 1e-9) len += st.second - st.first;
-        gb.plug_length = len;
-        gb.plug_mass = h.stemming_density * section * len;
-        gb.plug_shear = h.stemming_shear_strength;
-      }
+      if (d + 1 == h.decks.size()) set_collar_plug(gb, h, section);
       sc.gas.bodies.push_back(gb);
     }
   }

@@ -6,7 +6,7 @@ out=${2:-runs/demo}
 case_file=examples/single_hole_2d/bar.toml
 echo "== cdemblast demo: $case_file -> $out"
 "$bin" check "$case_file"
-"$bin" run "$case_file" --out "$out"
+"$bin" run "$case_file" --out "$out" --overwrite
 "$bin" report "$out"
 echo
 echo "== done. Look at:"

@@ -163,6 +163,23 @@ int main(int argc, char** argv) {
   run->add_option("--set", sets, "Override a case key: --set simulation.end_time=1e-3")
       ->allow_extra_args(false);
   run->add_flag("--quiet,-q", quiet, "No progress output");
+  std::string restart_dir;
+  bool overwrite = false;
+  run->add_option("--restart", restart_dir,
+                  "Continue the run in this directory from its last good checkpoint (the case may "
+                  "change only in end_time, the output and checkpoint schedule, threads)");
+  run->add_flag("--overwrite", overwrite, "Remove the results of an earlier run in --out first");
+
+  std::string resume_dir;
+  std::vector<std::string> resume_sets;
+  auto* resume = app.add_subcommand("resume", "Continue an interrupted run from its last good checkpoint "
+                                              "(its case.resolved.toml, as run --restart)");
+  resume->add_option("run_dir", resume_dir, "Run directory")->required();
+  resume->add_option("--threads,-t", threads, "OpenMP threads")
+      ->check(CLI::Range(0, cdem::kMaxThreads).description("an integer from 0 to 4096"));
+  resume->add_option("--set", resume_sets, "Change a key that may change: --set simulation.end_time=0.1")
+      ->allow_extra_args(false);
+  resume->add_flag("--quiet,-q", quiet, "No progress output");
 
   auto* check = app.add_subcommand("check", "Validate a case, mesh it, print the model size and dt");
   check->add_option("case", case_path, "Case file (TOML)")->required();
@@ -217,12 +234,31 @@ int main(int argc, char** argv) {
     if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets,
                                    study_verbose, argv[0]);
     if (*bench) return cdem::run_bench(bench_opt);
+    if (*resume) {
+      case_path = (std::filesystem::path(resume_dir) / "case.resolved.toml").string();
+      restart_dir = resume_dir;
+      sets = resume_sets;
+    }
+    if (!restart_dir.empty()) {
+      if (overwrite) {
+        fmt::print(stderr, "error: --restart continues a run, --overwrite removes it: give one of them\n");
+        return 2;
+      }
+      if (!out_dir.empty() && std::filesystem::weakly_canonical(out_dir) != std::filesystem::weakly_canonical(restart_dir)) {
+        fmt::print(stderr, "error: --restart {} continues that run in its own directory; --out {} differs\n",
+                   restart_dir, out_dir);
+        return 2;
+      }
+      out_dir = restart_dir;
+    }
     const cdem::Case c = cdem::load_case(case_path, sets);
     if (out_dir.empty()) out_dir = (std::filesystem::path("runs") / std::filesystem::path(case_path).stem()).string();
     cdem::RunOptions opt;
     opt.out_dir = out_dir;
     opt.threads = threads;
     opt.quiet = quiet;
+    opt.restart = !restart_dir.empty();
+    opt.overwrite = overwrite;
     const auto res = cdem::run_case(c, opt);
     return res.status;
   } catch (const cdem::InputError& e) {

@@ -23,7 +23,7 @@ from .plots import (MAX_FRAMES, choose_frames, compare_damage, last_frame, load_
                     plot_3d_views, plot_charges, plot_damage_final, plot_energy, plot_field_grid,
                     plot_fracture, plot_fragments_final, plot_grading, plot_monitors, plot_ppv,
                     plt)
-from .run import Run, finite, read_toml, unique_labels
+from .run import Run, finite, mixed_run_ids, read_toml, unique_labels
 from .setup import Setup, plot_setup
 from .vtu import VtuError
 
@@ -668,6 +668,12 @@ def main(argv=None):
     for d in args.runs:
         if not os.path.isdir(d):
             print(f"cdem_report: '{d}' is not a directory", file=sys.stderr)
+            return 2
+    for d in args.runs:
+        mixed = mixed_run_ids(d)
+        if mixed:
+            print(f"cdem_report: '{d}': {mixed}; rerun it into a clean directory "
+                  "(cdemblast run ... --overwrite)", file=sys.stderr)
             return 2
     try:
         runs = unique_labels([Run(d) for d in args.runs])

@@ -10,6 +10,7 @@ import csv
 import json
 import math
 import os
+import re
 
 import numpy as np
 
@@ -93,6 +94,43 @@ def finite(v):
 
 
 # ----------------------------------------------------------------------------- the run
+RUN_ID_RE = re.compile(r"cdemblast:? run_id ([0-9a-f]+)")
+
+
+def run_ids(path):
+    """{output file: run id} of a run directory: summary.json's "run_id", and the id that
+    fields.pvd, cracks.pvd (an XML comment) and case.resolved.toml (its first line) carry.
+    Files without an id (older runs) are left out."""
+    ids = {}
+    try:
+        with open(os.path.join(path, "summary.json")) as f:
+            rid = json.load(f).get("run_id")
+        if isinstance(rid, str) and rid:
+            ids["summary.json"] = rid
+    except (OSError, ValueError, AttributeError):
+        pass
+    for name in ("fields.pvd", "cracks.pvd", "case.resolved.toml"):
+        try:
+            with open(os.path.join(path, name), errors="replace") as f:
+                head = f.read(4096)
+        except OSError:
+            continue
+        m = RUN_ID_RE.search(head)
+        if m:
+            ids[name] = m.group(1)
+    return ids
+
+
+def mixed_run_ids(path):
+    """A message when the outputs of `path` carry different run ids (two runs wrote into it),
+    else None."""
+    ids = run_ids(path)
+    if len(set(ids.values())) <= 1:
+        return None
+    return "its outputs belong to different runs: " + ", ".join(
+        f"{k} has run {v}" for k, v in sorted(ids.items()))
+
+
 class Run:
     """Everything the report and the studies read from one run directory."""
 

@@ -256,19 +256,29 @@ def run_variant(binary, v, threads=None, extra=(), repeats=None, verbose=False, 
     sets = v.sets + v.extra_sets() + list(extra)
     for s in v.extra_sets():
         log(f"study: {v.name}: the end time drops output times: {s}")
-    cmd = [binary, "run", v.case, "--out", v.dir]
+    # An interrupted run (SIGINT, SIGTERM: its checkpoint) is continued; anything else in the
+    # directory is replaced (--overwrite: the run directory is cleared first).
+    summary = read_json(os.path.join(v.dir, "summary.json")) or {}
+    interrupted = (summary.get("status") == "interrupted"
+                   and os.path.isdir(os.path.join(v.dir, "checkpoints")))
+    opts = []
     if not verbose:
-        cmd.append("-q")
+        opts.append("-q")
     if threads is not None:
-        cmd += ["--threads", str(threads)]
+        opts += ["--threads", str(threads)]
     for s in sets:
-        cmd += ["--set", s]
+        opts += ["--set", s]
     n = repeats or v.repeat
     timing = {"wall_s": [], "cpu_s": []}
     os.makedirs(v.dir, exist_ok=True)
     for k in range(n):
         more = f" (run {k + 1} of {n})" if n > 1 else ""
-        log(f"study: running {v.name}{more} ...")
+        if k == 0 and interrupted and n == 1:
+            cmd = [binary, "run", v.case, "--restart", v.dir] + opts
+            log(f"study: continuing the interrupted {v.name} run from its checkpoint ...")
+        else:
+            cmd = [binary, "run", v.case, "--out", v.dir, "--overwrite"] + opts
+            log(f"study: running {v.name}{more} ...")
         r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.monotonic()
         rc = subprocess.run(cmd).returncode

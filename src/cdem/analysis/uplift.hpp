@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 
@@ -35,6 +36,13 @@ class UpliftTracker {
   void sample_monitors(const Model& m, const std::vector<std::int32_t>& monitor_blocks, double t);
   const std::vector<double>& monitor_max() const { return mon_max_; }
   const std::vector<double>& monitor_time() const { return mon_time_; }
+
+  // Saves or loads the maxima so far (checkpoints).
+  void io_state(StateArchive& ar) {
+    ar.io("uplift.max_up", max_up_);
+    ar.io("uplift.mon_max", mon_max_);
+    ar.io("uplift.mon_time", mon_time_);
+  }
 
  private:
   Vec3 up_;

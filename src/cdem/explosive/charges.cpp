@@ -674,10 +674,9 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
   }
 }
 
-void write_charge_header(std::FILE* f) {
-  std::fputs("time,hole,deck,model,pressure,volume_ratio,burnt_fraction,gas_volume,gas_mass_charge,"
-             "gas_mass_cracks,vented_mass,gas_work,plug_displacement\n",
-             f);
+std::string charge_csv_header() {
+  return "time,hole,deck,model,pressure,volume_ratio,burnt_fraction,gas_volume,gas_mass_charge,"
+         "gas_mass_cracks,vented_mass,gas_work,plug_displacement\n";
 }
 
 void write_charge_rows(std::FILE* f, double t, const BarCharges& bc, const SolidCharges& sc) {

@@ -121,7 +121,7 @@ void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);
 
 // charges.csv: per deck and time, the mean applied pressure, the charge volume ratio, the
 // burnt fraction.
-void write_charge_header(std::FILE* f);
+std::string charge_csv_header();
 void write_charge_rows(std::FILE* f, double t, const BarCharges& bars, const SolidCharges& solids);
 
 // Adds to the nodes of block b the forces of a uniform pressure p (Pa) on all its faces, in

@@ -485,7 +485,7 @@ Case parse_case(std::string_view text, const std::string& path,
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
                     "history_interval", "release_distance_factor", "energy_blowup_factor",
                     "max_steps", "gravity", "interfaces", "opened_stiffness",
-                    "allow_large_run"});
+                    "allow_large_run", "checkpoint_interval", "checkpoint_wall_interval"});
   c.end_time = sim->positive("end_time");
   c.dt_safety = sim->positive("dt_safety", 0.5);
   if (c.dt_safety > 1.0)
@@ -523,6 +523,8 @@ Case parse_case(std::string_view text, const std::string& path,
                                  "of the blocks' stability limit; dt shrinks by 1 / sqrt(1 + it))",
                                  sim->where("opened_stiffness"), c.opened_stiffness));
   c.allow_large_run = sim->boolean("allow_large_run", false);
+  c.checkpoint_interval = sim->non_negative("checkpoint_interval", 0.0);
+  c.checkpoint_wall_interval = sim->non_negative("checkpoint_wall_interval", 600.0);
   if (norm(c.gravity) > 1e4)
     throw InputError(fmt::format("{}: |g| = {:g} m/s^2 is more than 1000 times the Earth's; "
                                  "expected m/s^2, e.g. [0, -9.81]",
@@ -760,11 +762,12 @@ std::string resolved_case_toml(const Case& c) {
                    "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
                    "release_distance_factor = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
                    "max_steps = {}\ngravity = {}\ninterfaces = {}\nopened_stiffness = {:.17g}\n"
-                   "allow_large_run = {}\n",
+                   "allow_large_run = {}\ncheckpoint_interval = {:.17g}\n"
+                   "checkpoint_wall_interval = {:.17g}\n",
                    c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
                    c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
                    c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness,
-                   c.allow_large_run);
+                   c.allow_large_run, c.checkpoint_interval, c.checkpoint_wall_interval);
   o += "output_times = [";
   for (std::size_t i = 0; i < c.output_times.size(); ++i)
     o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);

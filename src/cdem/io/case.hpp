@@ -148,6 +148,8 @@ struct Case {
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
   double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2
   bool allow_large_run = false;         // lifts the caps on steps, outputs, samples (run_limits.hpp)
+  double checkpoint_interval = 0;       // s of simulated time between checkpoints (0: none)
+  double checkpoint_wall_interval = 600;  // s of wall time between checkpoints (0: none)
 
   Vec3 gravity{};
   ContactSettings contact;              // [contact]

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +23,29 @@ std::FILE* open_csv(const std::string& path, const std::string& header) {
   if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
   std::fputs(header.c_str(), f);
   return f;
+}
+
+// A history continued after a restart: cut back to `bytes` (its size at the checkpoint; rows
+// written after it are written again) and opened for appending. 0 bytes: not created yet.
+std::FILE* continue_csv(const std::string& path, std::int64_t bytes) {
+  if (bytes <= 0) return nullptr;
+  std::error_code ec;
+  const auto have = fs::file_size(path, ec);
+  if (ec || static_cast<std::int64_t>(have) < bytes)
+    throw std::runtime_error(fmt::format("cannot restart: '{}' is missing or shorter ({} bytes) than "
+                                         "at the checkpoint ({} bytes)",
+                                         path, ec ? 0 : have, bytes));
+  fs::resize_file(path, static_cast<std::uintmax_t>(bytes), ec);
+  if (ec) throw std::runtime_error(fmt::format("cannot restart: cannot cut '{}' back: {}", path, ec.message()));
+  std::FILE* f = std::fopen(path.c_str(), "a");
+  if (!f) throw std::runtime_error(fmt::format("cannot write '{}'", path));
+  return f;
+}
+
+std::int64_t csv_bytes(std::FILE* f) {
+  if (!f) return 0;
+  std::fflush(f);
+  return static_cast<std::int64_t>(std::ftell(f));
 }
 }  // namespace
 
@@ -52,38 +77,103 @@ void write_json(const std::string& path, const std::vector<std::pair<std::string
   o << "}\n";
 }
 
-RunWriter::RunWriter(const std::string& dir, const Case& c, const Model* m) : dir_(dir), case_(c) {
+RunWriter::RunWriter(const std::string& dir, const Case& c, const Model* m, const std::string& run_id,
+                     const std::string& charges_header, StateArchive* resume)
+    : dir_(dir), case_(c), run_id_(run_id) {
   fs::create_directories(fs::path(dir) / "fields");
   fs::create_directories(fs::path(dir) / "cracks");
   fs::create_directories(fs::path(dir) / "fragments");
   {
     std::ofstream o(fs::path(dir) / "case.resolved.toml");
     if (!o) throw std::runtime_error(fmt::format("cannot write into '{}'", dir));
+    if (!run_id.empty()) o << "# cdemblast run_id " << run_id << "\n";
     o << resolved_case_toml(c);
   }
-  fields_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "fields.pvd").string());
-  cracks_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "cracks.pvd").string());
-  monitors_ = open_csv((fs::path(dir) / "monitors.csv").string(),
-                       "time,monitor,sxx,syy,szz,sxy,syz,sxz,von_mises,pressure,ux,uy,uz,vx,vy,vz\n");
-  energy_ = open_csv((fs::path(dir) / "energy.csv").string(),
-                     "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
-                     "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,balance,"
-                     "error\n");
   std::string fracture_header = "time,degree_area,tensile_area,shear_area,degree_count,broken,total";
   if (m) {
     fracture_regions_ = fracture_degree_by_region(*m).regions;
     for (auto r : fracture_regions_) fracture_header += ",degree_area_" + csv_column_name(m->region_names[r]);
   }
-  fracture_ = open_csv((fs::path(dir) / "fracture.csv").string(), fracture_header + "\n");
+  const std::string monitors_header =
+      "time,monitor,sxx,syy,szz,sxy,syz,sxz,von_mises,pressure,ux,uy,uz,vx,vy,vz\n";
+  const std::string energy_header =
+      "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
+      "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,balance,"
+      "error\n";
+  const std::string p_monitors = (fs::path(dir) / "monitors.csv").string();
+  const std::string p_energy = (fs::path(dir) / "energy.csv").string();
+  const std::string p_fracture = (fs::path(dir) / "fracture.csv").string();
+  const std::string p_reactions = (fs::path(dir) / "reactions.csv").string();
+  const std::string p_charges = (fs::path(dir) / "charges.csv").string();
+  std::vector<std::pair<double, std::string>> fields_steps, cracks_steps;
+  if (resume) {
+    std::int64_t b_mon = 0, b_en = 0, b_fr = 0, b_re = 0, b_ch = 0;
+    resume->io("writer.monitors_bytes", b_mon);
+    resume->io("writer.energy_bytes", b_en);
+    resume->io("writer.fracture_bytes", b_fr);
+    resume->io("writer.reactions_bytes", b_re);
+    resume->io("writer.charges_bytes", b_ch);
+    resume->io("writer.frame", frame_);
+    std::vector<double> ft, ct;
+    std::vector<std::string> fn, cn;
+    resume->io("writer.fields_times", ft);
+    resume->io("writer.fields_files", fn);
+    resume->io("writer.cracks_times", ct);
+    resume->io("writer.cracks_files", cn);
+    if (fn.size() != ft.size() || cn.size() != ct.size())
+      throw std::runtime_error("cannot restart: the checkpoint's PVD entries are inconsistent");
+    for (std::size_t i = 0; i < ft.size(); ++i) fields_steps.emplace_back(ft[i], fn[i]);
+    for (std::size_t i = 0; i < ct.size(); ++i) cracks_steps.emplace_back(ct[i], cn[i]);
+    monitors_ = continue_csv(p_monitors, b_mon);
+    energy_ = continue_csv(p_energy, b_en);
+    fracture_ = continue_csv(p_fracture, b_fr);
+    reactions_ = continue_csv(p_reactions, b_re);
+    if (!charges_header.empty()) charges_ = continue_csv(p_charges, b_ch);
+  }
+  if (!monitors_) monitors_ = open_csv(p_monitors, monitors_header);
+  if (!energy_) energy_ = open_csv(p_energy, energy_header);
+  if (!fracture_) fracture_ = open_csv(p_fracture, fracture_header + "\n");
+  if (!charges_ && !charges_header.empty()) charges_ = open_csv(p_charges, charges_header);
+  fields_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "fields.pvd").string(), fields_steps, run_id);
+  cracks_pvd_ = std::make_unique<PvdWriter>((fs::path(dir) / "cracks.pvd").string(), cracks_steps, run_id);
+}
+
+void RunWriter::io_state(StateArchive& ar) {
+  std::int64_t b_mon = csv_bytes(monitors_), b_en = csv_bytes(energy_), b_fr = csv_bytes(fracture_),
+               b_re = csv_bytes(reactions_), b_ch = csv_bytes(charges_);
+  ar.io("writer.monitors_bytes", b_mon);
+  ar.io("writer.energy_bytes", b_en);
+  ar.io("writer.fracture_bytes", b_fr);
+  ar.io("writer.reactions_bytes", b_re);
+  ar.io("writer.charges_bytes", b_ch);
+  ar.io("writer.frame", frame_);
+  std::vector<double> ft, ct;
+  std::vector<std::string> fn, cn;
+  for (const auto& [t, f] : fields_pvd_->steps()) ft.push_back(t), fn.push_back(f);
+  for (const auto& [t, f] : cracks_pvd_->steps()) ct.push_back(t), cn.push_back(f);
+  ar.io("writer.fields_times", ft);
+  ar.io("writer.fields_files", fn);
+  ar.io("writer.cracks_times", ct);
+  ar.io("writer.cracks_files", cn);
+}
+
+void RunWriter::check_written() {
+  const std::pair<std::FILE*, const char*> files[] = {{monitors_, "monitors.csv"}, {energy_, "energy.csv"},
+                                                      {fracture_, "fracture.csv"}, {reactions_, "reactions.csv"},
+                                                      {charges_, "charges.csv"}};
+  for (const auto& [f, name] : files)
+    if (f && (std::fflush(f) != 0 || std::ferror(f)))
+      throw std::runtime_error(fmt::format("cannot write '{}': {}", (fs::path(dir_) / name).string(),
+                                           std::strerror(errno ? errno : EIO)));
 }
 
 RunWriter::~RunWriter() {
-  for (auto* f : {monitors_, energy_, fracture_, reactions_})
+  for (auto* f : {monitors_, energy_, fracture_, reactions_, charges_})
     if (f) std::fclose(f);
 }
 
 void RunWriter::flush() {
-  for (auto* f : {monitors_, energy_, fracture_, reactions_})
+  for (auto* f : {monitors_, energy_, fracture_, reactions_, charges_})
     if (f) std::fflush(f);
 }
 

@@ -7,13 +7,17 @@
 //   monitors.csv, energy.csv, fracture.csv   time histories (fracture.csv also per region:
 //                        degree_area_<region>, with the model given to the constructor)
 //   reactions.csv        reaction forces per constrained face set (write_reactions)
+//   charges.csv          the charges' state (with_charges)
 //   summary.json         key numbers of the run
+// Every output carries the run's id (summary.json, the PVD files as a comment, the first line of
+// case.resolved.toml), so that outputs of two runs can be told apart.
 #pragma once
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/io/vtu.hpp"
 #include "cdem/model/model.hpp"
@@ -25,7 +29,12 @@ class RunWriter {
  public:
   // With `m`, fracture.csv gets a degree_area_<region> column per region that has breakable
   // (rock) spring points (fracture_degree_by_region).
-  RunWriter(const std::string& dir, const Case& c, const Model* m = nullptr);
+  // `resume`: a checkpoint's records (io_state): the histories are cut back to the rows they had
+  // then and continued, the PVD series continues from its entries then. Else every file starts
+  // anew. `charges_header` not empty: charges.csv is written (charges_csv()) with it.
+  RunWriter(const std::string& dir, const Case& c, const Model* m = nullptr,
+            const std::string& run_id = "", const std::string& charges_header = "",
+            StateArchive* resume = nullptr);
   ~RunWriter();
   RunWriter(const RunWriter&) = delete;
   RunWriter& operator=(const RunWriter&) = delete;
@@ -43,6 +52,13 @@ class RunWriter {
   void write_history(const Model& m, double t, const EnergyBalance& e,
                      const std::vector<std::int32_t>& monitor_blocks);
   void flush();
+  // Flushes every history and throws std::runtime_error naming the file when a write failed
+  // (a full disk): the run then stops with that message.
+  void check_written();
+  // Saves the writer's position: the byte size of each history (after a flush), the PVD
+  // entries, the field output count.
+  void io_state(StateArchive& ar);
+  std::FILE* charges_csv() { return charges_; }
   const std::string& dir() const { return dir_; }
   int field_outputs() const { return frame_; }
 
@@ -54,6 +70,8 @@ class RunWriter {
   std::FILE* energy_ = nullptr;
   std::FILE* fracture_ = nullptr;
   std::FILE* reactions_ = nullptr;
+  std::FILE* charges_ = nullptr;
+  std::string run_id_;
   std::vector<std::int32_t> fracture_regions_;
   int frame_ = 0;
 };

@@ -4,6 +4,8 @@
 // ones from 1 MiB zlib blocks compressed in parallel beforehand.
 #include "cdem/io/vtu.hpp"
 
+#include "cdem/io/atomic_file.hpp"
+
 #include <fmt/format.h>
 #include <zlib.h>
 
@@ -61,58 +63,6 @@ bool has_control_char(const std::string& s) {
   return std::any_of(s.begin(), s.end(),
                      [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
 }
-
-std::string errno_text() { return std::strerror(errno); }
-
-// A file written through `path.tmp` and renamed onto `path` by commit(); removed if not
-// committed. Every failure throws std::runtime_error naming `path`.
-class AtomicFile {
- public:
-  explicit AtomicFile(const std::string& path) : path_(path), tmp_(path + ".tmp") {
-    file_ = std::fopen(tmp_.c_str(), "wb");
-    if (!file_)
-      throw std::runtime_error(
-          fmt::format("cannot write '{}': cannot create '{}': {}", path_, tmp_, errno_text()));
-    std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
-  }
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
-  ~AtomicFile() {
-    if (file_) {
-      std::fclose(file_);
-      std::remove(tmp_.c_str());
-    }
-  }
-
-  void write(const void* data, std::size_t size) {
-    if (size > 0 && std::fwrite(data, 1, size, file_) != size)
-      throw std::runtime_error(
-          fmt::format("cannot write '{}': write to '{}' failed: {}", path_, tmp_, errno_text()));
-  }
-  void write(const std::string& s) { write(s.data(), s.size()); }
-
-  void commit() {
-    std::string why;
-    if (std::fflush(file_) != 0) why = errno_text();
-    if (std::fclose(file_) != 0 && why.empty()) why = errno_text();
-    file_ = nullptr;
-    if (!why.empty()) {
-      std::remove(tmp_.c_str());
-      throw std::runtime_error(
-          fmt::format("cannot write '{}': closing '{}' failed: {}", path_, tmp_, why));
-    }
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      why = errno_text();
-      std::remove(tmp_.c_str());
-      throw std::runtime_error(
-          fmt::format("cannot write '{}': renaming '{}' failed: {}", path_, tmp_, why));
-    }
-  }
-
- private:
-  std::string path_, tmp_;
-  std::FILE* file_ = nullptr;
-};
 
 // Number of nodes of the fixed-size VTK cell types, 0 for any other type.
 int nodes_of_cell_type(std::uint8_t type) {
@@ -408,7 +358,13 @@ void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress) {
   file.commit();
 }
 
-PvdWriter::PvdWriter(std::string pvd_path) : path_(std::move(pvd_path)) { rewrite(); }
+PvdWriter::PvdWriter(std::string pvd_path, std::vector<std::pair<double, std::string>> steps,
+                     std::string run_id)
+    : path_(std::move(pvd_path)), steps_(std::move(steps)), run_id_(std::move(run_id)) {
+  if (has_control_char(run_id_) || run_id_.find("--") != std::string::npos)
+    throw std::invalid_argument(fmt::format("PvdWriter('{}'): a run id without control characters and '--'", path_));
+  rewrite();
+}
 
 void PvdWriter::add(double time, const std::string& vtu_path) {
   if (!std::isfinite(time))
@@ -431,6 +387,7 @@ void PvdWriter::rewrite() const {
                     "\n";
   xml += R"(<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">)"
          "\n";
+  if (!run_id_.empty()) xml += fmt::format("  <!-- cdemblast: run_id {} -->\n", run_id_);
   xml += "  <Collection>\n";
   for (const auto& [time, file] : steps_)
     xml += fmt::format(R"(    <DataSet timestep="{:.17g}" group="" part="0" file="{}"/>)"

@@ -93,7 +93,11 @@ void write_vtu(const std::string& path, const VtuMesh& mesh, bool compress = tru
 // an empty collection (replacing any old file), which also reports an unwritable path early.
 class PvdWriter {
  public:
-  explicit PvdWriter(std::string pvd_path);
+  // `steps`: entries already in the series (a restarted run continues it). `run_id`, when not
+  // empty, is written as an XML comment (cdemblast: run_id ...), so that a reader can tell whose
+  // series it is.
+  explicit PvdWriter(std::string pvd_path, std::vector<std::pair<double, std::string>> steps = {},
+                     std::string run_id = "");
   // `vtu_path` as ParaView should resolve it: relative to the directory of the .pvd file.
   // Throws std::invalid_argument for a non-finite time, std::runtime_error on I/O failure.
   void add(double time, const std::string& vtu_path);
@@ -105,6 +109,7 @@ class PvdWriter {
   void rewrite() const;
   std::string path_;
   std::vector<std::pair<double, std::string>> steps_;
+  std::string run_id_;
 };
 
 }  // namespace cdem

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
+#include <optional>
 
 #include "cdem/analysis/blast_quality.hpp"
 #include "cdem/analysis/damage.hpp"
@@ -19,10 +21,13 @@
 #include "cdem/core/resources.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/io/case_checks.hpp"
+#include "cdem/io/checkpoint.hpp"
 #include "cdem/io/run_writer.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/mesh/mesh_estimate.hpp"
 #include "cdem/mesh/topology.hpp"
+#include "cdem/solver/run_dir.hpp"
+#include "cdem/solver/run_state.hpp"
 #include "cdem/solver/simulation.hpp"
 #include "cdem/solver/time_step.hpp"
 
@@ -205,10 +210,92 @@ void add_charge_loads(PreparedCase& pc) {
     pc.sim.add_load([&s = pc.solids](Model& mm, AppliedLoads& out, double t) { solid_loads(mm, s, out, t); });
 }
 
+std::string restart_signature(const Case& c) {
+  Case k = c;
+  k.end_time = 1;
+  k.output_interval = 0;
+  k.output_times.clear();
+  k.history_interval = 0;
+  k.threads = 0;
+  k.max_steps = 0;
+  k.checkpoint_interval = 0;
+  k.checkpoint_wall_interval = 0;
+  // without its comments (they name the file the case was read from)
+  std::string out, line;
+  const std::string text = resolved_case_toml(k);
+  for (std::size_t i = 0; i < text.size();) {
+    const auto e = std::min(text.find('\n', i), text.size());
+    line = text.substr(i, e - i);
+    if (line.empty() || line[0] != '#') out += line + "\n";
+    i = e + 1;
+  }
+  return out;
+}
+
+namespace {
+
+// The first line where two texts differ, for the message of a refused restart.
+std::string first_difference(const std::string& a, const std::string& b) {
+  std::size_t i = 0, la = 0;
+  while (i < a.size() && i < b.size() && a[i] == b[i]) {
+    if (a[i] == '\n') la = i + 1;
+    ++i;
+  }
+  auto line = [](const std::string& s, std::size_t from) {
+    const auto e = s.find('\n', from);
+    return s.substr(from, e == std::string::npos ? std::string::npos : e - from);
+  };
+  return fmt::format("'{}' (checkpoint: '{}')", line(b, la), line(a, la));
+}
+
+// The newest checkpoint of `dir` that reads and checks out; a refused one is reported and the
+// one before it is tried.
+StateArchive load_last_checkpoint(const std::string& dir, bool quiet) {
+  const auto files = list_checkpoints(dir);
+  if (files.empty())
+    throw InputError(fmt::format("--restart {}: no checkpoint in '{}' (a run writes one every "
+                                 "simulation.checkpoint_wall_interval, at its end and when "
+                                 "interrupted)",
+                                 dir, checkpoint_dir(dir)));
+  std::string why;
+  for (const auto& f : files) {
+    try {
+      StateArchive ar = read_checkpoint(f);
+      if (!quiet) spdlog::info("restarting from {}", f);
+      return ar;
+    } catch (const CheckpointError& e) {
+      spdlog::warn("{}; trying the one before it", e.what());
+      why += fmt::format("\n  {}", e.what());
+    }
+  }
+  throw InputError(fmt::format("--restart {}: no readable checkpoint:{}", dir, why));
+}
+
+}  // namespace
+
 RunResult run_case(const Case& c, const RunOptions& opt) {
   const auto wall0 = Clock::now();
   const int threads = run_threads(c, opt.threads);
   omp_set_num_threads(threads);
+
+  // The directory is the run's alone: locked, and either a restart of the run in it or cleared of
+  // an earlier run's results (refused without --overwrite) before anything is written.
+  RunDirLock lock(opt.out_dir);
+  std::optional<StateArchive> ckpt;
+  if (opt.restart) {
+    ckpt.emplace(load_last_checkpoint(opt.out_dir, opt.quiet));
+    std::string sig;
+    ckpt->io("run.case_signature", sig);
+    const std::string now = restart_signature(c);
+    if (sig != now)
+      throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
+                                   "at {}; only simulation.end_time, output_interval, output_times, "
+                                   "history_interval, threads, max_steps and the checkpoint keys may "
+                                   "change for a restart",
+                                   c.path, opt.out_dir, first_difference(sig, now)));
+  } else {
+    prepare_run_dir(opt.out_dir, opt.overwrite);
+  }
 
   Mesh mesh = load_mesh(c);
   PreparedCase pc = prepare_case(c, mesh);
@@ -225,16 +312,44 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
                  c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), m.tied ? "tied" : "spring",
                  sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety, threads);
 
-  RunWriter out(opt.out_dir, c, &m);
-  ReactionMeter reactions(m, c);          // reactions.csv (constrained face sets)
+  // The run loop's own state (saved in checkpoints with the objects it steps).
+  std::string run_id = new_run_id();
+  double next_hist = 0;
+  std::vector<double> peak_vm(c.monitors.size(), 0.0), peak_vm_time(c.monitors.size(), 0.0);
+  EnergyBalance last{};
+  StepTimes kernel_times;
+  double wall_before = 0, loop_before = 0;  // of the runs before a restart
+  // (saving: wall and loop are the times so far; loading: they are read into *_before)
+  auto io_loop_state = [&](StateArchive& ar, double wall, double loop) {
+    ar.io("run.id", run_id);
+    ar.io("run.next_hist", next_hist);
+    ar.io("run.peak_vm", peak_vm);
+    ar.io("run.peak_vm_time", peak_vm_time);
+    ar.io("run.last_energy", last);
+    ar.io("run.kernel_times", kernel_times.s);
+    ar.io("run.wall_time", wall);
+    ar.io("run.loop_time", loop);
+    if (ar.loading()) wall_before = wall, loop_before = loop;
+  };
+
+  const bool has_charges = !bars.empty() || !solids.empty();
   UpliftTracker uplift(m, c);             // max displacement along up, per node and monitor
-  const double e_floor = energy_floor(m);
-  std::FILE* charges_csv = nullptr;
-  if (!bars.empty() || !solids.empty()) {
-    charges_csv = std::fopen((std::filesystem::path(opt.out_dir) / "charges.csv").string().c_str(), "w");
-    if (!charges_csv) throw std::runtime_error("cannot write charges.csv in " + opt.out_dir);
-    write_charge_header(charges_csv);
+  if (ckpt) {
+    sim.io_state(*ckpt);
+    io_state(*ckpt, bars);
+    io_state(*ckpt, solids);
+    uplift.io_state(*ckpt);
+    io_loop_state(*ckpt, 0.0, 0.0);
+    if (peak_vm.size() != c.monitors.size())
+      throw InputError(fmt::format("{}: the checkpoint has {} monitors, the case {}", c.path,
+                                   peak_vm.size(), c.monitors.size()));
+    if (!opt.quiet)
+      spdlog::info("continuing run {} from t = {:.6g} s (step {})", run_id, sim.time(), sim.steps());
   }
+  RunWriter out(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "",
+                ckpt ? &*ckpt : nullptr);
+  ReactionMeter reactions(m, c);          // reactions.csv (constrained face sets)
+  const double e_floor = energy_floor(m);
   if (!opt.quiet && !bars.empty()) spdlog::info("bar charges: {}", describe_bar_binding(bars));
 
   if (!opt.quiet && !solids.empty())
@@ -254,11 +369,11 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   // Counted by check_run_size (prepare_case): at most 2^53, so the conversion is exact.
   const auto steps_limit = static_cast<std::int64_t>(pc.size.steps);
   std::size_t next_field = 0;
-  double next_hist = 0;
+  if (ckpt) {  // the field times the run before the restart had reached (see the loop)
+    const double t_done = sim.time() - dt;
+    while (next_field < field_times.size() && field_times[next_field] <= t_done + 0.5 * dt) ++next_field;
+  }
   RunResult res;
-  std::vector<std::pair<std::string, double>> peak_vm(c.monitors.size(), {"", 0.0});
-  std::vector<double> peak_vm_time(c.monitors.size(), 0.0);
-  EnergyBalance last{};
   const bool tty = isatty(2) && !opt.quiet;
   auto last_print = Clock::now();
   // The charges' gas pressure on the crack faces, per interface (the larger of the bar and the
@@ -275,11 +390,40 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     return &crack_gas;
   };
   // Wall time per step kernel (summary.json kernel_time_s; a few clock reads per step).
-  StepTimes kernel_times;
   sim.set_timer(&kernel_times);
   const auto loop0 = Clock::now();
+  auto elapsed = [](Clock::time_point since) {
+    return std::chrono::duration<double>(Clock::now() - since).count();
+  };
 
-  for (std::int64_t k = 0; k < steps_limit; ++k) {
+  // A checkpoint of the state after the step just taken (atomic; the newest two are kept).
+  auto last_checkpoint = Clock::now();
+  auto write_state = [&]() {
+    out.check_written();
+    StateArchive ar(false);
+    std::string sig = restart_signature(c);
+    ar.io("run.case_signature", sig);
+    sim.io_state(ar);
+    io_state(ar, bars);
+    io_state(ar, solids);
+    uplift.io_state(ar);
+    io_loop_state(ar, wall_before + elapsed(wall0), loop_before + elapsed(loop0));
+    out.io_state(ar);
+    std::filesystem::create_directories(checkpoint_dir(opt.out_dir));
+    write_checkpoint(checkpoint_path(opt.out_dir, sim.steps()), ar);
+    prune_checkpoints(opt.out_dir, 2);
+    last_checkpoint = Clock::now();
+  };
+  double next_ckpt = c.checkpoint_interval > 0
+                         ? (std::floor(sim.time() / c.checkpoint_interval) + 1) * c.checkpoint_interval
+                         : 0.0;
+
+  install_stop_signals();
+  struct SignalGuard {
+    ~SignalGuard() { restore_default_signals(); }
+  } signal_guard;
+  const std::int64_t k0 = sim.steps();
+  for (std::int64_t k = k0; k < steps_limit; ++k) {
     const double t_state = sim.time();  // the state after this step is at t_n = this time
     const bool hist = t_state >= next_hist - 0.5 * dt || k + 1 == steps_limit;
     if (hist) reactions.before_step(m);
@@ -296,16 +440,15 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
         reactions.after_step(m, dt, t_state + 0.5 * dt);
         out.write_reactions(t_state, reactions.face_sets(), reactions.forces());
       }
-      if (charges_csv) write_charge_rows(charges_csv, t_state, bars, solids);
+      if (out.charges_csv()) write_charge_rows(out.charges_csv(), t_state, bars, solids);
       for (std::size_t q = 0; q < monitors.size(); ++q) {
         const double vm = von_mises(m.stress[monitors[q]]);
-        if (vm > peak_vm[q].second) peak_vm[q].second = vm, peak_vm_time[q] = t_state;
+        if (vm > peak_vm[q]) peak_vm[q] = vm, peak_vm_time[q] = t_state;
       }
       res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state, e_floor);
       if (!res.diagnosis.empty()) {
         out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
         out.flush();
-        if (charges_csv) std::fflush(charges_csv);
         res.status = 3;
         spdlog::error("run stopped: {}", res.diagnosis);
         spdlog::error("the output written so far is in {}", opt.out_dir);
@@ -315,7 +458,25 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     if (field || k + 1 == steps_limit) {
       while (next_field < field_times.size() && field_times[next_field] <= t_state + 0.5 * dt) ++next_field;
       out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
-      out.flush();
+      out.check_written();
+    }
+    if (const int sig = stop_signal()) {
+      write_state();
+      res.status = 128 + sig;
+      res.diagnosis = fmt::format("interrupted by {} at t = {:.6g} s (step {}); continue it with "
+                                  "cdemblast run CASE --restart {}",
+                                  sig == SIGINT ? "SIGINT" : "SIGTERM", sim.time(), sim.steps(),
+                                  opt.out_dir);
+      if (tty) fmt::print(stderr, "\n");
+      spdlog::warn("{}", res.diagnosis);
+      break;
+    }
+    if (k + 1 == steps_limit ||
+        (c.checkpoint_interval > 0 && sim.time() >= next_ckpt - 0.5 * dt) ||
+        (c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval)) {
+      write_state();
+      if (c.checkpoint_interval > 0)
+        while (next_ckpt <= sim.time() + 0.5 * dt) next_ckpt += c.checkpoint_interval;
     }
     if (!opt.quiet) {
       const auto now = Clock::now();
@@ -323,7 +484,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       if ((tty && since > 0.5) || (!tty && since > 10.0)) {
         last_print = now;
         const double el = std::chrono::duration<double>(now - loop0).count();
-        const double rate = (k + 1) / std::max(el, 1e-9);
+        const double rate = (k + 1 - k0) / std::max(el, 1e-9);
         const double eta = (steps_limit - k - 1) / rate;
         const std::string line = fmt::format("t = {:.4e} s  step {}/{}  {:.0f} steps/s  ETA {:.0f} s",
                                              t_state, k + 1, steps_limit, rate, eta);
@@ -334,17 +495,21 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       }
     }
   }
-  if (tty) fmt::print(stderr, "\n");
-  if (charges_csv) std::fclose(charges_csv);
+  if (tty && res.status == 0) fmt::print(stderr, "\n");
+  out.flush();
   res.steps = sim.steps();
-  res.wall_time_s = std::chrono::duration<double>(Clock::now() - wall0).count();
-  const double loop_s = std::chrono::duration<double>(Clock::now() - loop0).count();
+  res.wall_time_s = wall_before + std::chrono::duration<double>(Clock::now() - wall0).count();
+  const double loop_s = loop_before + std::chrono::duration<double>(Clock::now() - loop0).count();
+  const double loop_this = std::chrono::duration<double>(Clock::now() - loop0).count();
   const FractureDegree fd = fracture_degree(m);
+  const char* status = res.status == 0 ? "finished" : res.status == 3 ? "unstable" : "interrupted";
   std::vector<std::pair<std::string, std::string>> kv = {
       {"title", json_string(c.title)},
-      {"status", json_string(res.status == 0 ? "finished" : "unstable")},
+      {"run_id", json_string(run_id)},
+      {"status", json_string(status)},
       {"diagnosis", json_string(res.diagnosis)},
       {"end_time", json_number(sim.time())},
+      {"restarted_at_step", std::to_string(k0)},
       {"wall_time_s", json_number(res.wall_time_s)},
       {"loop_time_s", json_number(loop_s)},
       {"threads", std::to_string(threads)},
@@ -369,8 +534,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"blocks", std::to_string(m.n_blocks())},
       {"nodes", std::to_string(m.n_nodes())},
       {"spring_points", std::to_string(m.n_springs())},
-      {"block_steps_per_s", json_number(m.n_blocks() * static_cast<double>(res.steps) / loop_s)},
-      {"spring_steps_per_s", json_number(m.n_springs() * static_cast<double>(res.steps) / loop_s)},
+      {"block_steps_per_s", json_number(m.n_blocks() * static_cast<double>(res.steps - k0) / loop_this)},
+      {"spring_steps_per_s", json_number(m.n_springs() * static_cast<double>(res.steps - k0) / loop_this)},
       {"fracture_degree", json_number(fd.area)},
       {"fracture_degree_tensile", json_number(fd.tensile)},
       {"fracture_degree_shear", json_number(fd.shear)},
@@ -422,16 +587,17 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   for (std::size_t q = 0; q < monitors.size(); ++q)
     peaks += fmt::format("{}{}: {{\"peak_von_mises\": {}, \"time\": {}, \"max_up_displacement\": {}, "
                          "\"max_up_time\": {}}}",
-                         q ? ", " : "", json_string(c.monitors[q].name), json_number(peak_vm[q].second),
+                         q ? ", " : "", json_string(c.monitors[q].name), json_number(peak_vm[q]),
                          json_number(peak_vm_time[q]), json_number(uplift.monitor_max()[q]),
                          json_number(uplift.monitor_time()[q]));
   kv.emplace_back("monitors", peaks + "}");
   add_region_and_uplift_summary(kv, m, uplift);
   write_json((std::filesystem::path(opt.out_dir) / "summary.json").string(), kv);
+  if (res.status > 3) return res;  // interrupted: the summary says so, nothing more to say
   if (!opt.quiet && res.status == 0)
     spdlog::info("finished: {} steps in {:.2f} s ({:.3g} block-steps/s), fracture degree {:.4f}, "
                  "energy error {:.2e}; results in {}",
-                 res.steps, res.wall_time_s, m.n_blocks() * static_cast<double>(res.steps) / loop_s,
+                 res.steps, res.wall_time_s, m.n_blocks() * static_cast<double>(res.steps - k0) / loop_this,
                  fd.area, last.error, opt.out_dir);
   return res;
 }

@@ -17,10 +17,12 @@ struct RunOptions {
   std::string out_dir;
   int threads = 0;       // 0: the case's value, else all cores
   bool quiet = false;    // no progress output
+  bool restart = false;  // continue the run in out_dir from its last good checkpoint
+  bool overwrite = false;  // remove the results of an earlier run in out_dir first
 };
 
 struct RunResult {
-  int status = 0;        // 0 finished, 3 stopped unstable
+  int status = 0;        // 0 finished, 3 stopped unstable, 128 + signal interrupted
   std::string diagnosis;
   double wall_time_s = 0;
   std::int64_t steps = 0;
@@ -53,6 +55,13 @@ struct PreparedCase {
 PreparedCase prepare_case(const Case& c, const Mesh& mesh);
 void add_charge_loads(PreparedCase& pc);
 
+// Runs the case into opt.out_dir (locked for the run; docs/checkpoint.md), writing checkpoints
+// on the case's schedule, at the end and when interrupted by SIGINT / SIGTERM.
 RunResult run_case(const Case& c, const RunOptions& opt);
+
+// The case as a restart compares it: its resolved text with the keys that may change between a
+// checkpoint and its restart (end time, output and history schedule, threads, step cap,
+// checkpoint schedule) set to fixed values.
+std::string restart_signature(const Case& c);
 
 }  // namespace cdem

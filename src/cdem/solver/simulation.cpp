@@ -13,6 +13,7 @@
 #include "cdem/physics/springs.hpp"
 #include "cdem/physics/tie_failure.hpp"
 #include "cdem/physics/ties.hpp"
+#include "cdem/solver/run_state.hpp"
 
 namespace cdem {
 
@@ -348,6 +349,41 @@ EnergyBalance Simulation::energy() const {
   const double scale = std::max({std::abs(input), e.mechanical(), 1e-300});
   e.error = std::abs(e.balance) / scale;
   return e;
+}
+
+void Simulation::io_state(StateArchive& ar) {
+  cdem::io_state(ar, m_);
+  cdem::io_state(ar, contact_);
+  ar.io("sim.t", t_);
+  ar.io("sim.dt", dt_);
+  ar.io("sim.steps", steps_);
+  ar.io("sim.inverted", inverted_);
+  ar.io("sim.first_inverted", first_inverted_);
+  ar.io("sim.block_dissipated", block_dissipated_);
+  ar.io("sim.ke", ke_);
+  ar.io("sim.cke", cke_);
+  ar.io("sim.vtx_dissipated", vtx_dissipated_);
+  ar.io("sim.vtx_ke", vtx_ke_);
+  ar.io("sim.vtx_cke", vtx_cke_);
+  ar.io("sim.vtx_reaction", vtx_reaction_);
+  ar.io("sim.vtx_con", vtx_con_);
+  ar.io("sim.con_vertices", con_vertices_);
+  ar.io("sim.tie_flag", tie_flag_);
+  ar.io("sim.w_insert", w_insert_);
+  ar.io("sim.omega2_max", omega2_max_);
+  ar.io("sim.opened", opened_);
+  ar.io("sim.w_boundary", w_boundary_);
+  ar.io("sim.w_absorbed", w_absorbed_);
+  ar.io("sim.w_explosive", w_explosive_);
+  ar.io("sim.e_initial", e_initial_);
+  ar.io("sim.last_boundary", last_boundary_);
+  ar.io("sim.last_absorbed", last_absorbed_);
+  ar.io("sim.last_explosive", last_explosive_);
+  ar.io("sim.bc_v_old", bc_.v_old);
+  ar.io("sim.bc_load_force", bc_.load_force);
+  ar.io("sim.applied_node", applied_.node);
+  ar.io("sim.applied_force", applied_.force);
+  ar.io("sim.applied_v_old", applied_.v_old);
 }
 
 }  // namespace cdem

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 #include "cdem/physics/boundaries.hpp"
@@ -115,6 +116,12 @@ class Simulation {
   // Lowers dt to safety x dt_max when another part (e.g. explosive blocks) limits it. With a
   // fixed time step (simulation.dt) above dt_max, throws InputError naming the key.
   void limit_dt(double dt_max, const std::string& what);
+
+  // Saves or loads everything a step may change (checkpoints; solver/run_state.hpp): the time,
+  // the step count, the energy accumulators, the tied mode's per-vertex state, the boundary and
+  // contact state, and the model's state arrays. A loaded Simulation must have been set up from
+  // the same case and mesh.
+  void io_state(StateArchive& ar);
 
  private:
   void setup_damping_zones(const Case& c);

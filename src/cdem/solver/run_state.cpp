@@ -1,0 +1,129 @@
+#include "cdem/solver/run_state.hpp"
+
+namespace cdem {
+
+void io_state(StateArchive& ar, Model& m) {
+  // nodes
+  ar.io("model.x", m.x);
+  ar.io("model.v", m.v);
+  ar.io("model.f", m.f);
+  ar.io("model.mass", m.mass);
+  ar.io("model.inv_mass", m.inv_mass);
+  ar.io("model.damping", m.damping);
+  ar.io("model.local_damping", m.local_damping);
+  // blocks
+  ar.io("model.block_material", m.block_material);
+  ar.io("model.stress", m.stress);
+  ar.io("model.stress0", m.stress0);
+  ar.io("model.strain_energy", m.strain_energy);
+  ar.io("model.vol_ratio", m.vol_ratio);
+  // interfaces and spring points
+  ar.io("model.iface_normal", m.iface_normal);
+  ar.io("model.iface_normal_set", m.iface_normal_set);
+  ar.io("model.sp_area", m.sp_area.v);
+  ar.io("model.sp_kn", m.sp_kn.v);
+  ar.io("model.sp_ks", m.sp_ks.v);
+  ar.io("model.sp_fn", m.sp_fn);
+  ar.io("model.sp_fs", m.sp_fs);
+  ar.io("model.sp_w", m.sp_w);
+  ar.io("model.sp_slip", m.sp_slip);
+  ar.io("model.sp_dil", m.sp_dil);
+  ar.io("model.sp_g0", m.sp_g0);
+  ar.io("model.sp_state", m.sp_state);
+  ar.io("model.sp_mode", m.sp_mode);
+  ar.io("model.sp_break_time", m.sp_break_time);
+  ar.io("model.sp_dissipated", m.sp_dissipated);
+  ar.io("model.released_points", m.released_points);
+  // tied mode: the ties, the clusters, the active interfaces
+  ar.io("model.tied", m.tied);
+  ar.io("model.sp_tied", m.sp_tied);
+  ar.io("model.vtx_nodes", m.vtx_nodes);
+  ar.io("model.vtx_run", m.vtx_run);
+  ar.io("model.iface_check", m.iface_check);
+  ar.io("model.iface_active", m.iface_active);
+  ar.io("model.active_ifaces", m.active_ifaces);
+  ar.io("model.block_active", m.block_active);
+  ar.io("model.tie_reject", m.tie_reject);
+}
+
+void io_state(StateArchive& ar, ContactSet& cs) {
+  ar.io("contact.enabled", cs.enabled);
+  ar.io("contact.skin", cs.skin);
+  ar.io("contact.face_iface", cs.face_iface);
+  ar.io("contact.kc", cs.kc);
+  ar.io("contact.mu", cs.mu);
+  ar.io("contact.cand_faces", cs.cand_faces);
+  ar.io("contact.cand_nodes", cs.cand_nodes);
+  ar.io("contact.x_build", cs.x_build);
+  ar.io("contact.pair_node", cs.pair_node);
+  ar.io("contact.pair_block", cs.pair_block);
+  ar.io("contact.pair_fn", cs.pair_fn);
+  ar.io("contact.pair_ft", cs.pair_ft);
+  ar.io("contact.pair_force", cs.pair_force);
+  ar.io("contact.pair_w", cs.pair_w);
+  ar.io("contact.pair_in", cs.pair_in);
+  ar.io("contact.pair_g", cs.pair_g);
+  ar.io("contact.pair_margin", cs.pair_margin);
+  ar.io("contact.pair_score", cs.pair_score);
+  ar.io("contact.pair_kf", cs.pair_kf);
+  ar.io("contact.pair_kf_now", cs.pair_kf_now);
+  ar.io("contact.pair_n", cs.pair_n);
+  ar.io("contact.pair_k", cs.pair_k);
+  ar.io("contact.pair_diss", cs.pair_diss);
+  ar.io("contact.pair_gap", cs.pair_gap);
+  ar.io("contact.pair_g0", cs.pair_g0);
+  ar.io("contact.node_start", cs.node_start);
+  ar.io("contact.fnode", cs.fnode);
+  ar.io("contact.fnode_offset", cs.fnode_offset);
+  ar.io("contact.fnode_entry", cs.fnode_entry);
+  ar.io("contact.node_slot", cs.node_slot);
+  ar.io("contact.body", cs.body);
+  ar.io("contact.on_released", cs.on_released);
+  ar.io("contact.face_cand", cs.face_cand);
+  ar.io("contact.released_seen", cs.released_seen);
+  ar.io("contact.release_drift", cs.release_drift);
+  ar.io("contact.diss_closed", cs.diss_closed);
+  ar.io("contact.rebuilds", cs.rebuilds);
+  ar.io("contact.active", cs.active);
+  ar.io("contact.active_max", cs.active_max);
+  ar.io("contact.max_pen_ratio", cs.max_pen_ratio);
+  // the pair buffers' size (grown at rebuilds only; summary.json reports it)
+  std::uint64_t cap = cs.pair_node.capacity();
+  ar.io("contact.pair_capacity", cap);
+  if (ar.loading()) {
+    const auto n = static_cast<std::size_t>(cap);
+    for (auto* v : {&cs.pair_node, &cs.pair_block}) v->reserve(n);
+  }
+}
+
+void io_state(StateArchive& ar, GasField& g, const std::string& prefix) {
+  ar.io(prefix + ".bodies", g.bodies);
+  ar.io(prefix + ".burnt_volume", g.burnt_volume);
+  ar.io(prefix + ".cavity", g.cavity);
+  ar.io(prefix + ".iface_fill", g.iface_fill);
+  ar.io(prefix + ".iface_gas_p", g.iface_gas_p);
+  ar.io(prefix + ".iface_body", g.iface_body);
+  ar.io(prefix + ".block_body", g.block_body);
+  ar.io(prefix + ".block_exterior", g.block_exterior);
+}
+
+void io_state(StateArchive& ar, BarCharges& bars) {
+  ar.io("bars.seg_p", bars.seg_p);
+  ar.io("bars.seg_v", bars.seg_v);
+  ar.io("bars.seg_xi", bars.seg_xi);
+  ar.io("bars.elem_sigma", bars.elem_sigma);
+  ar.io("bars.t_last", bars.t_last);
+  io_state(ar, bars.gas, "bars.gas");
+}
+
+void io_state(StateArchive& ar, SolidCharges& solids) {
+  ar.io("solids.p", solids.p);
+  ar.io("solids.lambda", solids.lambda);
+  ar.io("solids.v", solids.v);
+  ar.io("solids.dead", solids.dead);
+  ar.io("solids.t_last", solids.t_last);
+  ar.io("solids.dead_count", solids.dead_count);
+  io_state(ar, solids.gas, "solids.gas");
+}
+
+}  // namespace cdem

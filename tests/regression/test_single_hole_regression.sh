@@ -86,7 +86,7 @@ PEAK_REL, TIME_ABS, FD_ABS, WORK_REL = 0.02, 5e-6, 0.02, 0.02
 ERR_FACTOR, ERR_ABS = 1.2, 1e-3
 # per run: its timings, the thread count and its run id (a new one for every run)
 TIMING = {"wall_time_s", "loop_time_s", "threads", "block_steps_per_s", "spring_steps_per_s", "kernel_time_s",
-          "run_id"}
+          "run_id", "checkpoint_write_time_s", "checkpoint_bytes", "checkpoints_written"}
 bad = 0
 
 def check(ok, what):

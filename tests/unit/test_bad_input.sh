@@ -186,6 +186,16 @@ expect hole_cavity_not_bool 2 stderr bar.toml -- "$BIN" check "$ROOT/examples/si
 expect missing_case_file 2 stderr no_such_case.toml -- "$BIN" check "$D/no_such_case.toml" -- "no such file"
 expect case_is_directory 2 stderr bad_input -- "$BIN" check "$D" -- "directory"
 expect run:threads_negative 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_thr" -q --threads -1 -- "--threads" "-1"
+# checkpoints and restart (docs/checkpoint.md)
+expect checkpoint_interval_negative 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" \
+  --set simulation.checkpoint_interval=-1 -- "key 'simulation.checkpoint_interval'" "got -1"
+expect checkpoint_wall_not_number 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" \
+  --set 'simulation.checkpoint_wall_interval="often"' -- "key 'simulation.checkpoint_wall_interval'"
+expect run:restart_no_checkpoint 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --restart "$TMP/run_nockpt" -q -- \
+  "no checkpoint in"
+expect run:restart_and_overwrite 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --restart "$TMP/run_ro" --overwrite -q -- \
+  "give one of them"
+expect resume_missing_dir 2 stderr "" -- "$BIN" resume "$TMP/no_such_run" -q -- "case.resolved.toml"
 
 # ---- issue 10: untrusted input (docs/input_safety.md) ----
 # Mesh files are read, never interpreted: a Gmsh script under any name is refused and its

@@ -39,7 +39,7 @@ same_outputs() {
     n=$((n + 1))
   done
   [ "$n" -ge 3 ] || fail "only $n field files in $a"
-  local drop='time_s|threads|restarted_at_step|steps_per_s|run_id|"wall|"loop|kernel'
+  local drop='time_s|checkpoint|threads|restarted_at_step|steps_per_s|run_id|"wall|"loop|kernel'
   cmp -s <(grep -Ev "$drop" "$a/summary.json") <(grep -Ev "$drop" "$b/summary.json") ||
     { diff <(grep -Ev "$drop" "$a/summary.json") <(grep -Ev "$drop" "$b/summary.json") | head; fail "summary.json differs between $a and $b"; }
 }
@@ -170,4 +170,11 @@ if /usr/bin/python3 -c 'import matplotlib' 2>/dev/null; then
     { cat "$TMP/mixed.log"; fail "report did not refuse mixed run ids (rc $rc)"; }
   echo "ok: report refuses outputs of different runs"
 fi
+# ---- a write error (a file-size limit, as a full disk): a clear message, no half checkpoint ----
+(ulimit -f 200; trap '' XFSZ; exec "$BIN" run "$C3" --out "$TMP/full" -q "${q3[@]}") >"$TMP/full.log" 2>&1
+rc=$?
+[ "$rc" = 1 ] && grep -q "cannot write '$TMP/full/.*File too large" "$TMP/full.log" ||
+  { cat "$TMP/full.log"; fail "a write error: rc $rc, expected 1 and a message naming the file"; }
+[ -z "$(find "$TMP/full" -name '*.tmp')" ] || fail "a write error left a partial file"
+echo "ok: a write error stops the run with a message naming the file, and no partial checkpoint"
 echo "PASS"

@@ -398,7 +398,11 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
 
   // A checkpoint of the state after the step just taken (atomic; the newest two are kept).
   auto last_checkpoint = Clock::now();
+  double checkpoint_s = 0;
+  std::int64_t checkpoints = 0;
+  std::uintmax_t checkpoint_bytes = 0;
   auto write_state = [&]() {
+    const auto t0 = Clock::now();
     out.check_written();
     StateArchive ar(false);
     std::string sig = restart_signature(c);
@@ -410,9 +414,14 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     io_loop_state(ar, wall_before + elapsed(wall0), loop_before + elapsed(loop0));
     out.io_state(ar);
     std::filesystem::create_directories(checkpoint_dir(opt.out_dir));
-    write_checkpoint(checkpoint_path(opt.out_dir, sim.steps()), ar);
+    const std::string path = checkpoint_path(opt.out_dir, sim.steps());
+    write_checkpoint(path, ar);
     prune_checkpoints(opt.out_dir, 2);
     last_checkpoint = Clock::now();
+    checkpoint_s += elapsed(t0);
+    ++checkpoints;
+    std::error_code ec;
+    checkpoint_bytes = std::filesystem::file_size(path, ec);
   };
   double next_ckpt = c.checkpoint_interval > 0
                          ? (std::floor(sim.time() / c.checkpoint_interval) + 1) * c.checkpoint_interval
@@ -547,6 +556,9 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"explosive_blocks", std::to_string(solids.block.size())},
       {"collapsed_explosive_blocks", std::to_string(solids.dead_count)},
       {"field_outputs", std::to_string(out.field_outputs())},
+      {"checkpoints_written", std::to_string(checkpoints)},
+      {"checkpoint_write_time_s", json_number(checkpoint_s)},
+      {"checkpoint_bytes", std::to_string(checkpoint_bytes)},
   };
   {  // where the loop's time went: each step kernel, and the rest (analysis, outputs, samples)
     std::string kt = "{";

@@ -33,8 +33,9 @@
 // energy F_n^2 / 2k + |F_t|^2 / 2k_t (friction, damping).
 //
 // Determinism: the pairs are sorted by (node, block); forces are computed per pair in parallel
-// and gathered per node in pair order (node side and block side in two passes): bitwise the same
-// for any thread count. Buffers grow only at a rebuild.
+// and gathered in pair order (node side and block side in two serial passes over the pairs that
+// passed the quick reject): bitwise the same for any thread count. Buffers grow only at a
+// rebuild.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -51,6 +52,15 @@ struct ContactSettings {
   double friction = -1;        // mu; < 0: tan(phi_r) of the interface material of the region pair
   double damping_ratio = 0;    // zeta
   double stiffness_factor = 1; // x the budget stiffness (<= 1)
+};
+
+// A candidate block's geometry this step: its bounding sphere grown for the quick reject
+// (centre, reach^2), the tolerance of "on a face", and per face a point and the outward normal.
+struct BlockPlanes {
+  Vec3 c;
+  double reach2 = 0, tol = 0;
+  int nf = 0;  // faces
+  std::array<Vec3, 4> a0, n;
 };
 
 struct ContactSet {
@@ -89,11 +99,19 @@ struct ContactSet {
                                          // already had when it came inside beyond what its
                                          // approach explains (an initial overlap, or a node that
                                          // sank in while a broken point held it); only shrinks
-  // gathers: node side (pairs of one node are consecutive)
-  std::vector<std::int32_t> node_start;  // start of each distinct node's pairs (+ end)
-  // block side: entries (4 p + i) per block node, CSR over distinct block nodes
-  std::vector<std::int32_t> fnode, fnode_offset, fnode_entry;
-  std::vector<std::int32_t> node_slot;  // rebuild: per node its entry count, then its fnode index
+  // the distinct blocks of the pairs, each pair's index among them, their geometry this step
+  // (the quick reject and the narrow phase); per block its index (-1: no pair)
+  std::vector<std::int32_t> cblock, pair_cb, block_slot;
+  std::vector<BlockPlanes> cb_geom;
+  // this step: the pairs that pass the quick reject (in pair order), per pair the flag, per
+  // node with near pairs the start of its run in `near` (+ end), per thread the counts
+  std::vector<std::int32_t> near, near_group;
+  std::vector<std::uint8_t> pair_near;
+  std::vector<std::int64_t> near_count;
+  // face-side gather: per node its slot in the step's sums (-1 none), the nodes touched, and
+  // their sums (formed in pair order, then added)
+  std::vector<std::int32_t> face_slot, face_touched;
+  std::vector<Vec3> face_sum;
   // work space of the rebuild
   std::vector<std::int32_t> body, bucket_offset, bucket_entry, scratch;
   std::vector<std::uint8_t> on_released;
@@ -116,6 +134,10 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
 // One step's contact forces added to m.f (call after the block forces). Rebuilds the pairs when
 // due. dt: the step (for the tangential increment and the damping).
 void contact_forces(Model& m, ContactSet& cs, double dt);
+
+// Rebuilds what is derived from the pairs (the distinct blocks, the step's work lists, their
+// capacities): at every rebuild, and after the pairs were loaded from a checkpoint.
+void index_pairs(const Model& m, ContactSet& cs);
 
 // Elastic energy stored in the contacts (J) and their dissipation so far (J).
 double contact_energy(const ContactSet& cs);

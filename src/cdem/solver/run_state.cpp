@@ -72,11 +72,6 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.pair_diss", cs.pair_diss);
   ar.io("contact.pair_gap", cs.pair_gap);
   ar.io("contact.pair_g0", cs.pair_g0);
-  ar.io("contact.node_start", cs.node_start);
-  ar.io("contact.fnode", cs.fnode);
-  ar.io("contact.fnode_offset", cs.fnode_offset);
-  ar.io("contact.fnode_entry", cs.fnode_entry);
-  ar.io("contact.node_slot", cs.node_slot);
   ar.io("contact.body", cs.body);
   ar.io("contact.on_released", cs.on_released);
   ar.io("contact.face_cand", cs.face_cand);
@@ -87,6 +82,7 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.active", cs.active);
   ar.io("contact.active_max", cs.active_max);
   ar.io("contact.max_pen_ratio", cs.max_pen_ratio);
+  // (the lists derived from the pairs are rebuilt after loading: Simulation::io_state)
   // the pair buffers' size (grown at rebuilds only; summary.json reports it)
   std::uint64_t cap = cs.pair_node.capacity();
   ar.io("contact.pair_capacity", cap);

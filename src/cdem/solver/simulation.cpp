@@ -354,6 +354,7 @@ EnergyBalance Simulation::energy() const {
 void Simulation::io_state(StateArchive& ar) {
   cdem::io_state(ar, m_);
   cdem::io_state(ar, contact_);
+  if (ar.loading() && contact_.enabled) index_pairs(m_, contact_);
   ar.io("sim.t", t_);
   ar.io("sim.dt", dt_);
   ar.io("sim.steps", steps_);

@@ -348,7 +348,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   }
   RunWriter out(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "",
                 ckpt ? &*ckpt : nullptr);
-  ReactionMeter reactions(m, c);          // reactions.csv (constrained face sets)
+  // reactions.csv (constrained face sets)
+  ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
   const double e_floor = energy_floor(m);
   if (!opt.quiet && !bars.empty()) spdlog::info("bar charges: {}", describe_bar_binding(bars));
 

@@ -33,7 +33,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   const cdem::PreparedCase pc = cdem::prepare_case(c, mesh);
   const cdem::Simulation& sim = pc.sim;
   const auto& m = sim.model();
-  cdem::locate_monitors(m, c);
+  cdem::locate_monitors(m, c.monitors, c.path);
   const cdem::BarCharges& bars = pc.bars;
   const cdem::SolidCharges& solids = pc.solids;
   const auto& st = sim.stable();

@@ -40,7 +40,7 @@ struct DeckSpec {
 };
 
 // A hole from `collar` (top) to `end` (bottom) with its decks placed from the bottom up exactly
-// as load_case does (io/case.cpp): deck.bottom = end + s up, deck.top = end + (s + length) up.
+// as load_case does (io/case_charges.cpp): deck.bottom = end + s up, deck.top = end + (s + length) up.
 inline HoleDef make_hole(const std::string& name, Vec3 collar, Vec3 end, double diameter,
                          const std::vector<DeckSpec>& decks, ChargeModel model = ChargeModel::Bar,
                          double attenuation = 1.25) {

@@ -64,7 +64,7 @@ BarRun static_bar(InterfaceMode mode, bool prestress, double damping, int steps)
     c.initial_stress.at_reference = {0, 0, -kP, 0, 0, 0};
   }
   Simulation sim(std::move(model), c);
-  ReactionMeter meter(sim.model(), c);
+  ReactionMeter meter(sim.model(), c.boundaries, c.gravity, c.path);
   EXPECT_EQ(meter.face_sets(), std::vector<std::string>{"bottom"});
   BarRun r{{}, {}, 0, 0};
   for (int k = 0; k < steps; ++k) {

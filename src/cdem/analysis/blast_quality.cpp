@@ -41,13 +41,15 @@ FragmentResult model_fragments(const Model& m) {
   return find_fragments(g, bonds, m.dim);
 }
 
-BlastQuality blast_quality(const Model& m, const Case& c) {
+BlastQuality blast_quality(const Model& m, const AnalysisSettings& a,
+                           const std::vector<BoundaryCondition>& boundaries,
+                           const std::vector<std::pair<Vec3, Vec3>>& holes) {
   BlastQuality q;
   q.fragments = model_fragments(m);
   // The main rock mass: the largest fragment touching the anchoring face sets.
-  std::vector<std::string> faces = c.analysis.main_faces;
+  std::vector<std::string> faces = a.main_faces;
   if (faces.empty())
-    for (const auto& bc : c.boundaries)
+    for (const auto& bc : boundaries)
       if (bc.type == BoundaryType::Fixed || bc.type == BoundaryType::Roller) faces.push_back(bc.faces);
   std::vector<std::int32_t> anchor;
   for (const auto& name : faces)
@@ -79,16 +81,16 @@ BlastQuality blast_quality(const Model& m, const Case& c) {
   in.fragment_of_block = q.fragments.fragment_of_block;
   in.main_fragment = q.main_fragment;
   in.dim = m.dim;
-  in.up = norm(c.analysis.up) > 0 ? normalized(c.analysis.up) : (m.dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
-  if (c.analysis.surface_level_set) {
-    in.surface_level = c.analysis.surface_level;
+  in.up = norm(a.up) > 0 ? normalized(a.up) : (m.dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+  if (a.surface_level_set) {
+    in.surface_level = a.surface_level;
   } else {
     double top = -std::numeric_limits<double>::infinity();
     for (const auto& p : m.X_nodes()) top = std::max(top, dot(p, in.up));
     in.surface_level = top;
   }
-  in.damage_threshold = c.analysis.damage_threshold;
-  for (const auto& h : c.holes) in.holes.emplace_back(h.collar, normalized(h.end - h.collar));
+  in.damage_threshold = a.damage_threshold;
+  in.holes = holes;
   if (q.main_fragment >= 0) q.funnel = blasting_funnel(in);
   return q;
 }

@@ -45,15 +45,16 @@ std::int32_t find_block(const Model& m, Vec3 p) {
   return -1;
 }
 
-std::vector<std::int32_t> locate_monitors(const Model& m, const Case& c) {
+std::vector<std::int32_t> locate_monitors(const Model& m, const std::vector<Monitor>& monitors,
+                                          const std::string& where) {
   std::vector<std::int32_t> out;
-  for (std::size_t k = 0; k < c.monitors.size(); ++k) {
-    const auto& mo = c.monitors[k];
+  for (std::size_t k = 0; k < monitors.size(); ++k) {
+    const auto& mo = monitors[k];
     const auto b = find_block(m, mo.point);
     if (b < 0)
       throw InputError(fmt::format("{}: key 'monitor[{}].point': monitor '{}' at ({}, {}, {}) is "
                                    "outside the mesh",
-                                   c.path, k, mo.name, mo.point.x, mo.point.y, mo.point.z));
+                                   where, k, mo.name, mo.point.x, mo.point.y, mo.point.z));
     out.push_back(b);
   }
   return out;

@@ -5,14 +5,15 @@
 #include <string>
 #include <vector>
 
-#include "cdem/io/case.hpp"
+#include "cdem/analysis/monitor_spec.hpp"
 #include "cdem/model/model.hpp"
 
 namespace cdem {
 
-// Block index containing each monitor; throws InputError (naming the case file and monitor)
-// for a point outside the mesh.
-std::vector<std::int32_t> locate_monitors(const Model& m, const Case& c);
+// Block index containing each monitor; throws InputError (naming `where`, the case file, and
+// the monitor) for a point outside the mesh.
+std::vector<std::int32_t> locate_monitors(const Model& m, const std::vector<Monitor>& monitors,
+                                          const std::string& where);
 
 // The block containing point p (reference configuration), or -1.
 std::int32_t find_block(const Model& m, Vec3 p);

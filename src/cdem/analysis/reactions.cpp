@@ -5,18 +5,16 @@
 
 namespace cdem {
 
-ReactionMeter::ReactionMeter(const Model& m, const Case& c) : gravity_(c.gravity) {
+ReactionMeter::ReactionMeter(const Model& m, const std::vector<BoundaryCondition>& boundaries,
+                             Vec3 gravity, const std::string& where)
+    : gravity_(gravity) {
   // One Boundaries per constraint [[boundary]] (the same preparation as the solver's, so the
   // same nodes, roller normals and tables).
-  for (std::size_t k = 0; k < c.boundaries.size(); ++k) {
-    const BoundaryType t = c.boundaries[k].type;
+  for (std::size_t k = 0; k < boundaries.size(); ++k) {
+    const BoundaryType t = boundaries[k].type;
     if (t != BoundaryType::Fixed && t != BoundaryType::Roller && t != BoundaryType::Velocity) continue;
-    Case one;
-    one.path = c.path;
-    one.gravity = c.gravity;
-    one.boundaries = {c.boundaries[k]};
-    bcs_.push_back(prepare_boundaries(m, one));
-    const std::string& name = c.boundaries[k].faces;
+    bcs_.push_back(prepare_boundaries(m, {boundaries[k]}, gravity, where));
+    const std::string& name = boundaries[k].faces;
     auto it = std::find(sets_.begin(), sets_.end(), name);
     if (it == sets_.end()) {
       sets_.push_back(name);

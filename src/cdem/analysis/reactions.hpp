@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "cdem/io/case.hpp"
+#include "cdem/model/boundary_spec.hpp"
 #include "cdem/model/model.hpp"
 #include "cdem/physics/boundaries.hpp"
 
@@ -24,7 +24,10 @@ namespace cdem {
 
 class ReactionMeter {
  public:
-  ReactionMeter(const Model& m, const Case& c);
+  // The case's boundaries and gravity, as given to the solver's prepare_boundaries (`where`
+  // names the case file in its messages).
+  ReactionMeter(const Model& m, const std::vector<BoundaryCondition>& boundaries, Vec3 gravity,
+                const std::string& where);
 
   bool empty() const { return sets_.empty(); }
   // The face sets with a velocity constraint, in the order of their first [[boundary]].

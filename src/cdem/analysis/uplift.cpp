@@ -4,16 +4,12 @@
 
 namespace cdem {
 
-Vec3 up_direction(const Model& m, const Case& c) {
-  return norm(c.analysis.up) > 0 ? normalized(c.analysis.up)
-                                 : (m.dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+Vec3 up_direction(const Model& m, Vec3 up) {
+  return norm(up) > 0 ? normalized(up) : (m.dim == 2 ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
 }
 
-UpliftTracker::UpliftTracker(const Model& m, const Case& c)
-    : up_(up_direction(m, c)),
-      max_up_(m.n_nodes(), 0.0),
-      mon_max_(c.monitors.size(), 0.0),
-      mon_time_(c.monitors.size(), 0.0) {}
+UpliftTracker::UpliftTracker(const Model& m, Vec3 up, std::size_t monitors)
+    : up_(up), max_up_(m.n_nodes(), 0.0), mon_max_(monitors, 0.0), mon_time_(monitors, 0.0) {}
 
 void UpliftTracker::update(const Model& m) {
   const auto nn = static_cast<std::int64_t>(m.n_nodes());

@@ -7,17 +7,17 @@
 #include <vector>
 
 #include "cdem/core/state_archive.hpp"
-#include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
 
 namespace cdem {
 
-// The up direction of the case: analysis.up normalised, else +y (2D) / +z (3D).
-Vec3 up_direction(const Model& m, const Case& c);
+// The up direction of a case: its analysis.up (`up`) normalised, else +y (2D) / +z (3D).
+Vec3 up_direction(const Model& m, Vec3 up);
 
 class UpliftTracker {
  public:
-  UpliftTracker(const Model& m, const Case& c);
+  // `up`: the unit up direction (up_direction); `monitors`: the number of monitor points.
+  UpliftTracker(const Model& m, Vec3 up, std::size_t monitors);
   // After a step: max over time of (x - X) . up per node (starts at 0: the reference state).
   void update(const Model& m);
   const std::vector<double>& per_node() const { return max_up_; }

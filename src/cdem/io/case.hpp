@@ -7,51 +7,22 @@
 #include <utility>
 #include <vector>
 
+#include "cdem/analysis/analysis_spec.hpp"
+#include "cdem/analysis/monitor_spec.hpp"
 #include "cdem/core/vec3.hpp"
 #include "cdem/explosive/eos.hpp"
 #include "cdem/explosive/gas_model.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
+#include "cdem/model/boundary_spec.hpp"
 #include "cdem/model/materials.hpp"
 #include "cdem/physics/contact.hpp"
 
 namespace cdem {
 
-// A function of time given as a table of (t, value) points, linearly interpolated, constant
-// before the first and after the last point.
-struct TimeTable {
-  std::vector<std::pair<double, double>> points{{0.0, 1.0}};
-  double operator()(double t) const;
-};
-
-enum class BoundaryType { Fixed, Roller, NonReflecting, Velocity, Pressure };
-inline const char* name_of(BoundaryType b) {
-  switch (b) {
-    case BoundaryType::Fixed: return "fixed";
-    case BoundaryType::Roller: return "roller";
-    case BoundaryType::NonReflecting: return "non_reflecting";
-    case BoundaryType::Velocity: return "velocity";
-    case BoundaryType::Pressure: return "pressure";
-  }
-  return "?";
-}
-
-struct BoundaryCondition {
-  std::string faces;        // face set name
-  BoundaryType type = BoundaryType::Fixed;
-  Vec3 direction{};         // velocity: the velocity vector scaled by `value(t)` (m/s)
-  double value = 0;         // pressure (Pa, positive pushes into the body) or velocity scale
-  TimeTable table;          // multiplies value
-};
-
 struct DampingZone {
   std::string region;       // the zone's region
   double max_damping = 0;   // mass-proportional coefficient at the outer edge (1/s)
   double exponent = 2.0;    // grading mu = mu_max (d / d_max)^exponent from the inner edge
-};
-
-struct Monitor {
-  std::string name;
-  Vec3 point;
 };
 
 struct InitialStress {
@@ -99,16 +70,6 @@ struct HoleDef {
   std::vector<Deck> decks;
   std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
   double length() const { return norm(collar - end); }
-};
-
-// How the blasting funnel is measured (SPEC 4, docs/theory_fragments.md).
-struct AnalysisSettings {
-  Vec3 up{};                    // free-surface normal, out of the rock; zero: +y (2D) / +z (3D)
-  double surface_level = 0;     // along `up`; used when surface_level_set
-  bool surface_level_set = false;  // default: the model's highest point along `up`
-  double damage_threshold = 1.0;   // a block counts as broken at this damage (or detached)
-  std::vector<std::string> main_faces;  // face sets whose blocks anchor the main rock mass
-                                        // (default: the face sets with fixed boundaries)
 };
 
 // How intact interfaces act (docs/theory.md "Tied interfaces"): "tied" (the nodes split from a

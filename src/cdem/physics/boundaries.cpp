@@ -11,19 +11,20 @@
 
 namespace cdem {
 
-Boundaries prepare_boundaries(const Model& m, const Case& c) {
+Boundaries prepare_boundaries(const Model& m, const std::vector<BoundaryCondition>& bcs,
+                              Vec3 gravity, const std::string& where) {
   Boundaries b;
-  b.gravity = c.gravity;
+  b.gravity = gravity;
   std::vector<std::int32_t> nodes;
-  for (std::size_t k = 0; k < c.boundaries.size(); ++k) {
-    const auto& bc = c.boundaries[k];
+  for (std::size_t k = 0; k < bcs.size(); ++k) {
+    const auto& bc = bcs[k];
     const auto* set = m.facet_set(bc.faces);
     if (!set) {
       std::string names;
       for (const auto& s : m.facet_sets) names += (names.empty() ? "'" : ", '") + s.name + "'";
       throw InputError(fmt::format("{}: key 'boundary[{}].faces': no face set '{}' in the mesh "
                                    "(its face sets are {})",
-                                   c.path, k, bc.faces, names.empty() ? "none" : names));
+                                   where, k, bc.faces, names.empty() ? "none" : names));
     }
     const auto table = static_cast<std::int32_t>(b.tables.size());
     b.tables.push_back(bc.table);

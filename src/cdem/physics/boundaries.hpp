@@ -1,4 +1,4 @@
-// Boundary conditions (SPEC 1.4) prepared once from the case: velocity constraints (fixed,
+// Boundary conditions (SPEC 1.4) prepared once from their specs (boundary_spec.hpp): velocity constraints (fixed,
 // roller, prescribed velocity) applied after the velocity update, and boundary forces
 // (pressure, Lysmer-Kuhlemeyer viscous dashpots) added before it. Gravity is applied in the
 // integration kernel. The boundary forces run in parallel (per facet, then per node in a fixed
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "cdem/io/case.hpp"
+#include "cdem/model/boundary_spec.hpp"
 #include "cdem/model/model.hpp"
 
 namespace cdem {
@@ -51,8 +51,11 @@ struct Boundaries {
 // time t); v unchanged when the node has none.
 Vec3 constrain_velocity(const Boundaries& b, std::int32_t n, Vec3 v, double t);
 
-// Throws InputError naming the case file and key for an unknown face set.
-Boundaries prepare_boundaries(const Model& m, const Case& c);
+// The constraints and loads of `bcs` on m (a boundary's index in bcs names its key,
+// boundary[k]), with the gravity the integration applies. Throws InputError naming `where`
+// (the case file) and the key for an unknown face set.
+Boundaries prepare_boundaries(const Model& m, const std::vector<BoundaryCondition>& bcs,
+                              Vec3 gravity, const std::string& where);
 
 // Adds the pressure and dashpot forces at time t to m.f (and saves v(n-1/2) of boundary nodes).
 void boundary_forces(Model& m, Boundaries& b, double t);

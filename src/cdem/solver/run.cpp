@@ -302,7 +302,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   add_charge_loads(pc);
   Simulation& sim = pc.sim;
   const Model& m = sim.model();
-  const auto monitors = locate_monitors(m, c);
+  const auto monitors = locate_monitors(m, c.monitors, c.path);
   BarCharges& bars = pc.bars;
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
@@ -333,7 +333,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   };
 
   const bool has_charges = !bars.empty() || !solids.empty();
-  UpliftTracker uplift(m, c);             // max displacement along up, per node and monitor
+  // max displacement along up, per node and monitor
+  UpliftTracker uplift(m, up_direction(m, c.analysis.up), c.monitors.size());
   if (ckpt) {
     sim.io_state(*ckpt);
     io_state(*ckpt, bars);
@@ -348,7 +349,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   }
   RunWriter out(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "",
                 ckpt ? &*ckpt : nullptr);
-  ReactionMeter reactions(m, c);          // reactions.csv (constrained face sets)
+  // reactions.csv (constrained face sets)
+  ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
   const double e_floor = energy_floor(m);
   if (!opt.quiet && !bars.empty()) spdlog::info("bar charges: {}", describe_bar_binding(bars));
 
@@ -572,7 +574,9 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     kv.emplace_back("kernel_time_s", kt);
   }
   // Blasting quality of the final state: fragments, grading (main rock mass excluded), funnel.
-  const BlastQuality bq = blast_quality(m, c);
+  std::vector<std::pair<Vec3, Vec3>> hole_axes;  // collar, direction into the rock
+  for (const auto& h : c.holes) hole_axes.emplace_back(h.collar, normalized(h.end - h.collar));
+  const BlastQuality bq = blast_quality(m, c.analysis, c.boundaries, hole_axes);
   {
     std::FILE* g = std::fopen((std::filesystem::path(opt.out_dir) / "grading.csv").string().c_str(), "w");
     if (g) {

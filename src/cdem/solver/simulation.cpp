@@ -19,7 +19,7 @@ namespace cdem {
 
 Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
-  bc_ = prepare_boundaries(m_, c);
+  bc_ = prepare_boundaries(m_, c.boundaries, c.gravity, c.path);
   setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
   std::vector<double>().swap(m_.inv_mass);  // no kernel reads it (integrate uses mass)

@@ -1,16 +1,19 @@
 // General contact (SPEC 1.5, docs/theory.md "General contact"): fragments, released faces and the
 // model's boundary faces push on each other and never pass through.
 //
-// Broad phase: the candidate faces (the model's boundary faces and the faces of interfaces with a
-// released spring point) are hashed by their bounding boxes, grown by a skin s plus half their
-// block's size, into a uniform cell grid; every node of a candidate face looks up its own cell.
-// A (node, block) pair is kept when the node lies in the grown box of a candidate face of the
-// block and the two belong to different bodies (blocks connected through points that are not
+// Broad phase: the blocks with a candidate face (the model's boundary faces and the faces of
+// interfaces with a released spring point) are hashed by their bounding boxes, grown by a skin s,
+// into a uniform cell grid; every node of a candidate face looks up its own cell. A (node, block)
+// pair is kept when the node lies in the block's grown box and the two belong to different bodies (blocks connected through points that are not
 // released), or either lies on a released face; never the node's own block, nor a block holding
 // a node it is bonded to (tied, or joined by a broken point: that point is their contact until
 // it is released). Linear in the number of candidates (counting sort into the hash table). The
 // list is rebuilt when a candidate node has moved more than s/2 since the last build (checked
 // every step: no face and node can meet unseen) or when spring points were released.
+//
+// Each step, a pair that held no contact and whose node is outside the block's bounding sphere or
+// in front of one of its face planes (both computed once per block) is skipped: only the pairs
+// that pass ("near") go through the narrow phase, the resolution and the gathers.
 //
 // Narrow phase, node against block (its candidate faces: triangles in 3D, edges in 2D). With
 // g_k = (x - p_k) . n_k the node's signed distance to the plane of face k (outward unit normal

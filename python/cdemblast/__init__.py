@@ -13,6 +13,7 @@ Modules (see docs/report.md and docs/study.md):
     report      the run report (scripts/cdem_report.py, `cdemblast report`)
     study       studies: variants of a base case, run and compared (`cdemblast study`)
     analyses    study analyses of the shipped examples (SPEC 5.1, 5.2)
+    overlap     nodes inside a block of another fragment (contact checks; needs scipy)
 
 The thin commands (scripts/cdem_report.py, scripts/cdem_study.py, examples/*/compare,
 examples/multihole_3d/speedup) put this directory's parent on sys.path and import it; no
@@ -31,4 +32,4 @@ except ImportError as _e:
     sys.exit(f"cdemblast: {_e}; run it with a python3 that has numpy and matplotlib (Debian: "
              "/usr/bin/python3 with python3-numpy and python3-matplotlib)")
 
-__all__ = ["vtu", "run", "geometry", "plots", "setup", "checks", "yardsticks", "report", "study"]
+__all__ = ["vtu", "run", "geometry", "plots", "setup", "checks", "yardsticks", "report", "study", "overlap"]

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""The nodes inside a block of another fragment at the last field output of two runs (without
-and with contact), counted and drawn side by side (scripts/contact_on_off.sh)."""
+"""The nodes inside a block of another fragment at the last field output of runs (without
+contact, with it, with contact.candidates = "cracked"), counted and drawn side by side
+(scripts/contact_on_off.sh)."""
 
 import argparse
 import os
@@ -18,12 +19,15 @@ from cdemblast.run import Run  # noqa: E402
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("runs", nargs=2, metavar="RUN", help="the run without contact, then with it")
+    ap.add_argument("runs", nargs="+", metavar="LABEL=RUN", help="a label and a run directory")
     ap.add_argument("--out", required=True, help="the PNG to write")
     args = ap.parse_args(argv)
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), constrained_layout=True, sharey=True)
+    runs = [r.split("=", 1) if "=" in r else (os.path.basename(r.rstrip("/")), r) for r in args.runs]
+    fig, axes = plt.subplots(1, len(runs), figsize=(5.2 * len(runs) + 0.6, 4.8),
+                             constrained_layout=True, sharey=True, squeeze=False)
+    axes = axes[0]
     rows = []
-    for ax, d, label in zip(axes, args.runs, ("without contact", "with contact")):
+    for ax, (label, d) in zip(axes, runs):
         run = Run(d)
         if not run.fields:
             print(f"contact_on_off: {d}: no field output", file=sys.stderr)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # General contact on and off on a shipped 3D blast (docs/verification_contact.md, "With and
-# without contact"): examples/multihole_3d/bar.toml run to a late time with [contact] on (the
-# default) and off, then the nodes that lie inside a block of another fragment counted and drawn
+# without contact"): examples/multihole_3d/bar.toml run to a late time with [contact] off, on (the
+# default) and on with candidates = "cracked", then the nodes that lie inside a block of another fragment counted and drawn
 # (runs/contact_on_off/contact_on_off.png).
 #   bash scripts/contact_on_off.sh [build/bin/cdemblast] [end time, s]     (needs python3-scipy)
 set -u
@@ -10,11 +10,16 @@ BIN=${1:-build/bin/cdemblast}
 END=${2:-0.005}
 OUT=runs/contact_on_off
 mkdir -p "$OUT"
-for c in on off; do
-  enabled=true; [ "$c" = off ] && enabled=false
+for c in off on cracked; do
+  case $c in
+    off) set_=(--set contact.enabled=false) ;;
+    on) set_=(--set contact.enabled=true) ;;
+    cracked) set_=(--set contact.enabled=true --set 'contact.candidates="cracked"') ;;
+  esac
   "$BIN" run examples/multihole_3d/bar.toml --out "$OUT/$c" --overwrite -q --threads 2 \
     --set "simulation.end_time=$END" --set "simulation.output_times=[$END]" \
-    --set "contact.enabled=$enabled" > "$OUT/$c.log" 2>&1
+    "${set_[@]}" > "$OUT/$c.log" 2>&1
   echo "contact $c: exit $?"
 done
-/usr/bin/python3 scripts/contact_on_off.py "$OUT/off" "$OUT/on" --out "$OUT/contact_on_off.png"
+/usr/bin/python3 scripts/contact_on_off.py "without contact=$OUT/off" "with contact=$OUT/on" \
+  "with contact, cracked faces too=$OUT/cracked" --out "$OUT/contact_on_off.png"

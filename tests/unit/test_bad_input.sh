@@ -186,6 +186,8 @@ expect hole_cavity_not_bool 2 stderr bar.toml -- "$BIN" check "$ROOT/examples/si
 expect missing_case_file 2 stderr no_such_case.toml -- "$BIN" check "$D/no_such_case.toml" -- "no such file"
 expect case_is_directory 2 stderr bad_input -- "$BIN" check "$D" -- "directory"
 expect run:threads_negative 2 stderr "" -- "$BIN" run "$D/good_2d.toml" --out "$TMP/run_thr" -q --threads -1 -- "--threads" "-1"
+expect contact_candidates_bad 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" \
+  --set 'contact.candidates="all"' -- "key 'contact.candidates'" "released" "cracked"
 # checkpoints and restart (docs/checkpoint.md)
 expect checkpoint_interval_negative 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" \
   --set simulation.checkpoint_interval=-1 -- "key 'simulation.checkpoint_interval'" "got -1"

@@ -76,6 +76,9 @@ bitwise 2d_solid_springs "$S2" "${q2[@]}" --set 'simulation.interfaces="springs"
 bitwise 3d_bar "$C3" "${q3[@]}"
 grep -q '"contact_pairs_max": [1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: no contact was active"
 grep -q '"fracture_degree": 0\.[1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: not cracked"
+# contact with the cracked faces as candidates too (contact.candidates): the same guarantees
+bitwise 3d_bar_cracked "$C3" "${q3[@]}" --set 'contact.candidates="cracked"'
+grep -q 'candidates = "cracked"' "$TMP/3d_bar_cracked.full/case.resolved.toml" || fail "candidates not resolved"
 
 # ---- SIGTERM and SIGINT mid-run, then resume ----
 # interrupt SIGNAL DIR ARGS...: starts the 3D run, signals it once its history has 40 rows.

@@ -73,6 +73,9 @@ std::string resolved_case_toml(const Case& c) {
                    c.contact.enabled ? "true" : "false", c.contact.skin, c.contact.damping_ratio,
                    c.contact.stiffness_factor);
   if (c.contact.friction >= 0) o += fmt::format("friction = {:.17g}\n", c.contact.friction);
+  // (written only when not the default, so that checkpoints of cases resolved before the key
+  // existed still match: solver/run.cpp restart_signature)
+  if (c.contact.cracked_faces) o += "candidates = \"cracked\"\n";
   for (const auto& m : c.materials) {
     o += fmt::format("\n[[material]]\nname = {}\nregions = [", q(m.name));
     for (std::size_t i = 0; i < m.regions.size(); ++i) o += (i ? ", " : "") + q(m.regions[i]);

@@ -84,15 +84,17 @@ void rebuild(Model& m, ContactSet& cs) {
   // 1. Bodies: blocks connected through points that are not released.
   cs.body.resize(nb);
   std::iota(cs.body.begin(), cs.body.end(), 0);
-  std::vector<std::uint8_t> iface_released(ni, 0);
+  std::vector<std::uint8_t> iface_released(ni, 0), iface_cracked(ni, 0);
   for (std::size_t i = 0; i < ni; ++i) {
-    bool joined = false, released = false;
+    bool joined = false, released = false, cracked = false;
     for (int q = 0; q < np; ++q) {
       const auto st = m.sp_state[i * np + q];
       joined = joined || st != kReleased;
       released = released || st == kReleased;
+      cracked = cracked || st != kIntact;
     }
     iface_released[i] = released;
+    iface_cracked[i] = cracked;
     if (joined) {
       const auto ra = find_root(cs.body, m.iface_block_a[i]), rb = find_root(cs.body, m.iface_block_b[i]);
       if (ra != rb) cs.body[std::max(ra, rb)] = std::min(ra, rb);
@@ -108,10 +110,10 @@ void rebuild(Model& m, ContactSet& cs) {
     const std::int32_t b = static_cast<std::int32_t>(f / 4), k = static_cast<std::int32_t>(f % 4);
     if (k >= local_faces(m.block_type[b]).count) continue;
     const std::int32_t i = cs.face_iface[f];
-    if (i >= 0 && !iface_released[i]) continue;
+    if (i >= 0 && !(cs.cfg.cracked_faces ? iface_cracked[i] : iface_released[i])) continue;
     cs.cand_faces.push_back(static_cast<std::int32_t>(f));
     cs.face_cand[f] = 1;
-    if (i >= 0) {
+    if (i >= 0 && iface_released[i]) {
       const int c = face_nodes(m, static_cast<std::int32_t>(f), q);
       for (int j = 0; j < c; ++j) cs.on_released[q[j]] = 1;
     }
@@ -137,7 +139,7 @@ void rebuild(Model& m, ContactSet& cs) {
   for (const auto f : cs.cand_faces) {
     const std::int32_t bf = f / 4;
     if (cand_block.empty() || cand_block.back() != bf) cand_block.push_back(bf), cand_released.push_back(0);
-    if (cs.face_iface[f] >= 0) cand_released.back() = 1;
+    if (cs.face_iface[f] >= 0 && iface_released[cs.face_iface[f]]) cand_released.back() = 1;
   }
   const std::size_t nf = cand_block.size();
   std::vector<Vec3> lo(nf), hi(nf);

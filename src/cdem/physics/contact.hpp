@@ -2,7 +2,7 @@
 // model's boundary faces push on each other and never pass through.
 //
 // Broad phase: the blocks with a candidate face (the model's boundary faces and the faces of
-// interfaces with a released spring point) are hashed by their bounding boxes, grown by a skin s,
+// interfaces with a released spring point; with candidates = "cracked", with a broken one) are hashed by their bounding boxes, grown by a skin s,
 // into a uniform cell grid; every node of a candidate face looks up its own cell. A (node, block)
 // pair is kept when the node lies in the block's grown box and the two belong to different bodies (blocks connected through points that are not
 // released), or either lies on a released face; never the node's own block, nor a block holding
@@ -55,6 +55,9 @@ struct ContactSettings {
   double friction = -1;        // mu; < 0: tan(phi_r) of the interface material of the region pair
   double damping_ratio = 0;    // zeta
   double stiffness_factor = 1; // x the budget stiffness (<= 1)
+  // candidates = "cracked": the faces of interfaces with a broken point are candidates too, not
+  // only released ones (no fragment passes into another; several times the contact cost)
+  bool cracked_faces = false;
 };
 
 // A candidate block's geometry this step: its bounding sphere grown for the quick reject

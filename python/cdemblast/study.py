@@ -256,11 +256,14 @@ def run_variant(binary, v, threads=None, extra=(), repeats=None, verbose=False, 
     sets = v.sets + v.extra_sets() + list(extra)
     for s in v.extra_sets():
         log(f"study: {v.name}: the end time drops output times: {s}")
-    # An interrupted run (SIGINT, SIGTERM: its checkpoint) is continued; anything else in the
-    # directory is replaced (--overwrite: the run directory is cleared first).
-    summary = read_json(os.path.join(v.dir, "summary.json")) or {}
-    interrupted = (summary.get("status") == "interrupted"
-                   and os.path.isdir(os.path.join(v.dir, "checkpoints")))
+    # An interrupted run (SIGINT, SIGTERM: its checkpoint and an "interrupted" summary) or a
+    # killed one (checkpoints, no summary) is continued; anything else in the directory is
+    # replaced (--overwrite: the run directory is cleared first).
+    summary = read_json(os.path.join(v.dir, "summary.json"))
+    ckpts = os.path.join(v.dir, "checkpoints")
+    interrupted = (os.path.isdir(ckpts) and any(n.endswith(".cdemckpt") for n in os.listdir(ckpts))
+                   and (summary is None
+                        or (isinstance(summary, dict) and summary.get("status") == "interrupted")))
     opts = []
     if not verbose:
         opts.append("-q")

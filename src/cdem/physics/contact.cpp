@@ -222,12 +222,9 @@ void rebuild(Model& m, ContactSet& cs) {
   cs.pair_ft.assign(npair, Vec3{});
   cs.pair_force.assign(npair, Vec3{});
   cs.pair_w.assign(npair, {0.0, 0.0, 0.0, 0.0});
-  std::vector<std::uint8_t> old_in;
-  old_in.swap(cs.pair_in);
   std::vector<std::int8_t> old_kf;
   old_kf.swap(cs.pair_kf);
   cs.pair_kf.assign(npair, -1);
-  cs.pair_in.assign(npair, 2);  // 2: new at this build (carried pairs get their flag below)
   {
     std::size_t o = 0;
     const std::size_t nold = old_node.size();
@@ -249,21 +246,11 @@ void rebuild(Model& m, ContactSet& cs) {
         cs.pair_g0[p] = old_g0[o];
         cs.pair_ft[p] = old_ft[o];
         cs.pair_force[p] = old_force[o];
-        cs.pair_in[p] = old_in[o];
         cs.pair_kf[p] = old_kf[o];
         ++o;
       }
     }
     while (o < nold) drop(o++);
-    // A new pair whose node was in contact with the same body through another block is not a
-    // new overlap: its depth is the contact's, not to be ignored.
-    std::size_t a = 0;
-    for (std::size_t p = 0; p < npair; ++p) {
-      if (cs.pair_in[p] != 2) continue;
-      while (a < nold && old_node[a] < cs.pair_node[p]) ++a;
-      for (std::size_t b = a; b < nold && old_node[b] == cs.pair_node[p]; ++b)
-        if (old_gap[b] > 0 && cs.body[old_face[b]] == cs.body[cs.pair_block[p]]) cs.pair_in[p] = 1;
-    }
   }
   // The pair's stiffness: the smallest of the node's and the block nodes' budgets.
   for (std::size_t p = 0; p < npair; ++p) {
@@ -301,6 +288,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.pair_kf_now.resize(npair);
   cs.pair_margin.resize(npair);
   cs.pair_n.resize(npair);
+  cs.pair_w.resize(npair);
   cs.pair_near.assign(npair, 0);
   cs.face_touched.reserve(4 * cs.cblock.size());
   cs.face_sum.reserve(4 * cs.cblock.size());
@@ -494,10 +482,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         // in front of a face by more than tol: outside the block, the same test as below
         for (int k = 0; k < bp.nf && near; ++k) near = dot(x - bp.a0[k], bp.n[k]) <= bp.tol;
       }
-      if (!near) {  // outside the block: no ignored depth (d0 below), not inside
-        if (cs.pair_g0[p] != 0) cs.pair_g0[p] = 0;
-        if (cs.pair_in[p] != 0) cs.pair_in[p] = 0;
-      }
+      if (!near && cs.pair_g0[p] != 0) cs.pair_g0[p] = 0;  // outside: no ignored depth (d0)
       cs.pair_near[p] = near;
       count += near;
     }
@@ -653,7 +638,6 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
           cs.pair_g0[p] = cs.pair_g0[q];
           cs.pair_fn[p] = cs.pair_fn[q];
           cs.pair_force[p] = cs.pair_force[q];
-          cs.pair_in[p] = 1;
           cs.pair_kf[p] = cs.pair_kf_now[p];  // p holds it from now on
           cs.pair_kf[q] = -1;
           cs.pair_ft[q] = {};
@@ -695,7 +679,6 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     if (in_contact) d0 = std::min(d0, -g);
     if (!inside) d0 = 0;
     cs.pair_g0[p] = d0;
-    cs.pair_in[p] = inside;
     Vec3 force{}, ft{};
     double fn = 0, gap = 0;
     if (in_contact && k > 0 && -g > d0) {

@@ -90,7 +90,6 @@ struct ContactSet {
   std::vector<Vec3> pair_ft;             // tangential force on the node (N)
   std::vector<Vec3> pair_force;          // this step's force on the node (N)
   std::vector<std::array<double, 4>> pair_w;  // this step's weights of the block's nodes
-  std::vector<std::uint8_t> pair_in;     // the node was inside the block at the last step
   // this step's geometry of each pair: the gap to the nearest candidate face, its normal, and
   // how deep inside the block the node is (-1: outside); a node inside several blocks of one
   // body (exactly on their shared face or edge) is in contact with the one it is deepest in only

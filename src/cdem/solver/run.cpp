@@ -281,18 +281,18 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   // The directory is the run's alone: locked, and either a restart of the run in it or cleared of
   // an earlier run's results (refused without --overwrite) before anything is written.
   RunDirLock lock(opt.out_dir);
+  std::string signature = restart_signature(c);
   std::optional<StateArchive> ckpt;
   if (opt.restart) {
     ckpt.emplace(load_last_checkpoint(opt.out_dir, opt.quiet));
     std::string sig;
     ckpt->io("run.case_signature", sig);
-    const std::string now = restart_signature(c);
-    if (sig != now)
+    if (sig != signature)
       throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
                                    "at {}; only simulation.end_time, output_interval, output_times, "
                                    "history_interval, threads, max_steps and the checkpoint keys may "
                                    "change for a restart",
-                                   c.path, opt.out_dir, first_difference(sig, now)));
+                                   c.path, opt.out_dir, first_difference(sig, signature)));
   } else {
     prepare_run_dir(opt.out_dir, opt.overwrite);
   }
@@ -319,31 +319,30 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   EnergyBalance last{};
   StepTimes kernel_times;
   double wall_before = 0, loop_before = 0;  // of the runs before a restart
-  // (saving: wall and loop are the times so far; loading: they are read into *_before)
-  auto io_loop_state = [&](StateArchive& ar, double wall, double loop) {
+  double wall_so_far = 0, loop_so_far = 0;  // saved: the times up to the checkpoint
+  const bool has_charges = !bars.empty() || !solids.empty();
+  // max displacement along up, per node and monitor
+  UpliftTracker uplift(m, up_direction(m, c.analysis.up), c.monitors.size());
+  // Everything the loop steps, listed once for saving and loading (the writer loads its own
+  // position in its constructor, below).
+  auto io_run_state = [&](StateArchive& ar) {
+    sim.io_state(ar);
+    io_state(ar, bars);
+    io_state(ar, solids);
+    uplift.io_state(ar);
     ar.io("run.id", run_id);
     ar.io("run.next_hist", next_hist);
     ar.io("run.peak_vm", peak_vm);
     ar.io("run.peak_vm_time", peak_vm_time);
     ar.io("run.last_energy", last);
     ar.io("run.kernel_times", kernel_times.s);
-    ar.io("run.wall_time", wall);
-    ar.io("run.loop_time", loop);
-    if (ar.loading()) wall_before = wall, loop_before = loop;
+    ar.io("run.wall_time", wall_so_far);
+    ar.io("run.loop_time", loop_so_far);
   };
-
-  const bool has_charges = !bars.empty() || !solids.empty();
-  // max displacement along up, per node and monitor
-  UpliftTracker uplift(m, up_direction(m, c.analysis.up), c.monitors.size());
-  if (ckpt) {
-    sim.io_state(*ckpt);
-    io_state(*ckpt, bars);
-    io_state(*ckpt, solids);
-    uplift.io_state(*ckpt);
-    io_loop_state(*ckpt, 0.0, 0.0);
-    if (peak_vm.size() != c.monitors.size())
-      throw InputError(fmt::format("{}: the checkpoint has {} monitors, the case {}", c.path,
-                                   peak_vm.size(), c.monitors.size()));
+  if (ckpt) {  // (the same case, so the same model sizes and monitors: checked above)
+    io_run_state(*ckpt);
+    wall_before = wall_so_far;
+    loop_before = loop_so_far;
     if (!opt.quiet)
       spdlog::info("continuing run {} from t = {:.6g} s (step {})", run_id, sim.time(), sim.steps());
   }
@@ -407,13 +406,10 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     const auto t0 = Clock::now();
     out.check_written();
     StateArchive ar(false);
-    std::string sig = restart_signature(c);
-    ar.io("run.case_signature", sig);
-    sim.io_state(ar);
-    io_state(ar, bars);
-    io_state(ar, solids);
-    uplift.io_state(ar);
-    io_loop_state(ar, wall_before + elapsed(wall0), loop_before + elapsed(loop0));
+    ar.io("run.case_signature", signature);
+    wall_so_far = wall_before + elapsed(wall0);
+    loop_so_far = loop_before + elapsed(loop0);
+    io_run_state(ar);
     out.io_state(ar);
     std::filesystem::create_directories(checkpoint_dir(opt.out_dir));
     const std::string path = checkpoint_path(opt.out_dir, sim.steps());

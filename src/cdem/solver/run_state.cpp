@@ -60,14 +60,7 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.pair_fn", cs.pair_fn);
   ar.io("contact.pair_ft", cs.pair_ft);
   ar.io("contact.pair_force", cs.pair_force);
-  ar.io("contact.pair_w", cs.pair_w);
-  ar.io("contact.pair_in", cs.pair_in);
-  ar.io("contact.pair_g", cs.pair_g);
-  ar.io("contact.pair_margin", cs.pair_margin);
-  ar.io("contact.pair_score", cs.pair_score);
   ar.io("contact.pair_kf", cs.pair_kf);
-  ar.io("contact.pair_kf_now", cs.pair_kf_now);
-  ar.io("contact.pair_n", cs.pair_n);
   ar.io("contact.pair_k", cs.pair_k);
   ar.io("contact.pair_diss", cs.pair_diss);
   ar.io("contact.pair_gap", cs.pair_gap);
@@ -82,7 +75,8 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.active", cs.active);
   ar.io("contact.active_max", cs.active_max);
   ar.io("contact.max_pen_ratio", cs.max_pen_ratio);
-  // (the lists derived from the pairs are rebuilt after loading: Simulation::io_state)
+  // (the lists derived from the pairs and the step's per-pair geometry, recomputed before it is
+  // read, are not stored: index_pairs sizes them after loading, Simulation::io_state)
   // the pair buffers' size (grown at rebuilds only; summary.json reports it)
   std::uint64_t cap = cs.pair_node.capacity();
   ar.io("contact.pair_capacity", cap);

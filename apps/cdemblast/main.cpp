@@ -2,7 +2,7 @@
 //   cdemblast run CASE [--out DIR] [--threads N] [--set key=value]...
 //   cdemblast check CASE [--set key=value]...
 //   cdemblast report RUN... [--out DIR]
-//   cdemblast study FILE [--out DIR] [--threads N] [--no-run] [--set KEY=VALUE ...] [-v]
+//   cdemblast study FILE [--out DIR] [--threads N] [--no-run] [--variant NAME ...] [--set KEY=VALUE ...] [-v]
 //   cdemblast --version
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -130,7 +130,8 @@ int cmd_report(const std::vector<std::string>& runs, const std::string& out) {
 
 // A study (docs/study.md): the variants are run by this very program (--bin).
 int cmd_study(const std::string& file, const std::string& out, int threads, bool no_run,
-              const std::vector<std::string>& sets, bool verbose, const char* argv0) {
+              const std::vector<std::string>& sets, const std::vector<std::string>& only,
+              bool verbose, const char* argv0) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::path self = fs::read_symlink("/proc/self/exe", ec);
@@ -140,6 +141,7 @@ int cmd_study(const std::string& file, const std::string& out, int threads, bool
   if (threads > 0) args.insert(args.end(), {"--threads", std::to_string(threads)});
   if (no_run) args.push_back("--no-run");
   for (const auto& s : sets) args.insert(args.end(), {"--set", s});
+  for (const auto& v : only) args.insert(args.end(), {"--variant", v});
   if (verbose) args.push_back("-v");
   return run_python("CDEM_STUDY_SCRIPT", "cdem_study.py", args);
 }
@@ -194,7 +196,7 @@ int main(int argc, char** argv) {
   std::string study_file, study_out;
   int study_threads = 0;
   bool study_no_run = false, study_verbose = false;
-  std::vector<std::string> study_sets;
+  std::vector<std::string> study_sets, study_only;
   auto* study = app.add_subcommand("study", "Run the variants of a study file and compare them (docs/study.md)");
   study->add_option("file", study_file, "Study file (TOML)")->required();
   study->add_option("--out,-o", study_out, "Study directory (default: the file's [study] out)");
@@ -203,6 +205,8 @@ int main(int argc, char** argv) {
   study->add_flag("--no-run", study_no_run, "Compare the runs already in the directory");
   study->add_option("--set", study_sets, "Override a key of every variant's case, after [study] set")
       ->allow_extra_args(false);
+  study->add_option("--variant", study_only,
+                    "Run only this variant (repeatable; e.g. one per process), compare once all are finished");
   study->add_flag("--verbose,-v", study_verbose, "Show the runs' progress");
 
   cdem::BenchOptions bench_opt;
@@ -231,7 +235,7 @@ int main(int argc, char** argv) {
   try {
     if (*check) return cmd_check(case_path, sets);
     if (*report) return cmd_report(report_runs, report_out);
-    if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets,
+    if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets, study_only,
                                    study_verbose, argv[0]);
     if (*bench) return cdem::run_bench(bench_opt);
     if (*resume) {

@@ -298,7 +298,7 @@ def run_variant(binary, v, threads=None, extra=(), repeats=None, verbose=False, 
 
 
 def run_study(study, binary, threads=None, only=None, extra_sets=None, repeats=None,
-              verbose=False, resume=True, include_optional=(), log=print):
+              verbose=False, resume=True, include_optional=(), log=print, resume_only=False):
     """Runs the variants that need it; returns the updated timings (DIR/timings.json)."""
     os.makedirs(study.out, exist_ok=True)
     tpath = os.path.join(study.out, "timings.json")
@@ -310,12 +310,13 @@ def run_study(study, binary, threads=None, only=None, extra_sets=None, repeats=N
         if v.optional and v.name not in include_optional and not (only and v.name in only):
             continue
         v.sets = v.sets + list((extra_sets or {}).get(v.name, []))
-        if resume and not only and v.is_done():
+        if resume and (not only or resume_only) and v.is_done():
             v.resumed = True
             log(f"study: {v.name}: finished run found in {v.dir} (same resolved case): not rerun")
             continue
-        timings[v.name] = run_variant(binary, v, threads, (), (repeats or {}).get(v.name),
-                                      verbose, log)
+        t = run_variant(binary, v, threads, (), (repeats or {}).get(v.name), verbose, log)
+        timings = read_json(tpath) or {}  # (re-read: other processes may run other variants)
+        timings[v.name] = t
         with open(tpath, "w") as f:
             json.dump(timings, f, indent=1)
     return timings
@@ -1084,6 +1085,9 @@ def main(argv=None):
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="an override of every variant's case, after [study] set (repeatable)")
     ap.add_argument("--no-run", action="store_true", help="compare the runs already in the directory")
+    ap.add_argument("--variant", action="append", default=[], metavar="NAME",
+                    help="run only this variant (repeatable), e.g. one per process or machine "
+                         "into the same directory; the comparison is made once all are finished")
     ap.add_argument("--bin", help="the cdemblast binary (default: $CDEM_BIN, else build/bin/cdemblast)")
     ap.add_argument("--no-pictures", action="store_true", help="tables and JSON only")
     ap.add_argument("-v", "--verbose", action="store_true", help="show the runs' progress")
@@ -1092,8 +1096,23 @@ def main(argv=None):
         ap.error("--threads must be >= 0")
     try:
         study = Study(args.file, args.out, args.set)
+        names = [v.name for v in study.variants]
+        unknown = [n for n in args.variant if n not in names]
+        if unknown:
+            raise StudyError(f"--variant {unknown[0]}: no such variant in {args.file} "
+                             f"(expected one of {', '.join(names)})")
         if not args.no_run:
-            run_study(study, find_binary(args.bin), args.threads, verbose=args.verbose)
+            if args.variant:
+                run_study(study, find_binary(args.bin), args.threads, only=args.variant,
+                          verbose=args.verbose, resume_only=True)
+            else:
+                run_study(study, find_binary(args.bin), args.threads, verbose=args.verbose)
+        if args.variant:
+            waiting = [v.name for v in study.variants if not v.optional and not v.is_done()]
+            if waiting:
+                print(f"cdemblast study: {', '.join(args.variant)} done; not compared yet: "
+                      f"{', '.join(waiting)} not finished (then: cdemblast study {args.file} --no-run)")
+                return 0
         res = compare(study, pictures=not args.no_pictures)
     except StudyError as ex:
         print(f"cdemblast study: error: {ex}", file=sys.stderr)

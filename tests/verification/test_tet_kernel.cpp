@@ -1,7 +1,8 @@
 // The vectorised tet kernel (block_forces_tet: chunks of 8 blocks, one per SIMD lane, the Newton
 // polar iteration masked per lane) against the one-block-at-a-time reference
 // (block_forces_tet_reference). The chunked kernel writes every operation out, with the fused
-// multiply-adds where GCC fuses them in the reference, so the two must agree bit for bit:
+// multiply-adds where GCC fused them in the reference on the machine it was written on, so the
+// two agree there bit for bit and elsewhere to round-off (checked to 1e-13, below):
 // nodal forces (with the spring gather), Cauchy stress, strain energy, volume ratio, the
 // inverted count and the first inverted block.
 //
@@ -11,6 +12,8 @@
 // that do not start or end on a chunk boundary (the partial chunks).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <string>
@@ -25,7 +28,43 @@ namespace {
 
 using namespace test_models;
 
-TEST(TetKernel, VectorisedMatchesReferenceBitForBit) {
+// Agreement to round-off: every entry within 1e-13 of the array's largest magnitude. The chunked
+// kernel's roundings are fixed (contraction off, explicit fused multiply-adds); the reference's
+// are GCC's contraction for the build's target, so the two agreed bit for bit on one CPU kind
+// (AVX-512, GCC 12 -march=native) and differ in the last bits on another (AVX-512 FP16, where
+// -march=native is another target): measured at most 3e-20 of the largest force there. A
+// wrong term would differ by far more than 1e-13.
+double max_abs(double x) { return std::abs(x); }
+double max_abs(const Vec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); }
+double max_abs(const Sym6& s) {
+  double r = 0;
+  for (double x : s) r = std::max(r, std::abs(x));
+  return r;
+}
+template <class T>
+double diff_abs(const T& a, const T& b);
+template <>
+double diff_abs(const double& a, const double& b) { return std::abs(a - b); }
+template <>
+double diff_abs(const Vec3& a, const Vec3& b) { return max_abs(a - b); }
+template <>
+double diff_abs(const Sym6& a, const Sym6& b) {
+  double r = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) r = std::max(r, std::abs(a[k] - b[k]));
+  return r;
+}
+template <class T>
+bool close(const std::vector<T>& a, const std::vector<T>& b) {
+  if (a.size() != b.size()) return false;
+  double scale = 0, d = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    scale = std::max(scale, max_abs(b[i]));
+    d = std::max(d, diff_abs(a[i], b[i]));
+  }
+  return d <= 1e-13 * scale;
+}
+
+TEST(TetKernel, VectorisedMatchesReference) {
   const Mesh mesh = tet_box(6, 5, 5, 0.6, 0.5, 0.5);
   Model base = make_model(mesh, rock(), interface_of(InterfaceLaw::MohrCoulomb));
   const Mat3 Q = rotation({1, 2, 3}, 0.3);
@@ -67,10 +106,10 @@ TEST(TetKernel, VectorisedMatchesReferenceBitForBit) {
                                  std::to_string(b0) + ", " + std::to_string(b1) + ")";
         EXPECT_EQ(inv, inv_ref) << what;
         EXPECT_EQ(first, first_ref) << what;
-        EXPECT_TRUE(same_bits(m.f, ref.f)) << what << ": nodal forces differ";
-        EXPECT_TRUE(same_bits(m.stress, ref.stress)) << what << ": stress differs";
-        EXPECT_TRUE(same_bits(m.strain_energy, ref.strain_energy)) << what << ": energy differs";
-        EXPECT_TRUE(same_bits(m.vol_ratio, ref.vol_ratio)) << what << ": J differs";
+        EXPECT_TRUE(close(m.f, ref.f)) << what << ": nodal forces differ";
+        EXPECT_TRUE(close(m.stress, ref.stress)) << what << ": stress differs";
+        EXPECT_TRUE(close(m.strain_energy, ref.strain_energy)) << what << ": energy differs";
+        EXPECT_TRUE(close(m.vol_ratio, ref.vol_ratio)) << what << ": J differs";
         if (b1 - b0 > 100) {
           EXPECT_GE(inv, 3) << what;  // the three inverted blocks are seen
         }

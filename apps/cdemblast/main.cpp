@@ -67,9 +67,10 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
     const auto& ct = sim.contact();
     double kmin = 1e300, kmax = 0;
     for (double k : ct.kc) kmin = std::min(kmin, k), kmax = std::max(kmax, k);
-    fmt::print("contact     on: node against {}, skin {:.3g} m, penalty {:.3g} to {:.3g} N/m, "
+    fmt::print("contact     on: node against {}{}, skin {:.3g} m, penalty {:.3g} to {:.3g} N/m, "
                "friction {}, damping ratio {}\n",
-               m.dim == 3 ? "triangle" : "edge", ct.skin, kmin, kmax,
+               m.dim == 3 ? "triangle" : "edge", ct.edges ? ", edge against edge" : "", ct.skin,
+               kmin, kmax,
                c.contact.friction >= 0 ? fmt::format("{}", c.contact.friction)
                                        : std::string("from the interface materials"),
                c.contact.damping_ratio);

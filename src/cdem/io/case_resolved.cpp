@@ -76,6 +76,7 @@ std::string resolved_case_toml(const Case& c) {
   // (written only when not the default, so that checkpoints of cases resolved before the key
   // existed still match: solver/run.cpp restart_signature)
   if (c.contact.cracked_faces) o += "candidates = \"cracked\"\n";
+  if (!c.contact.edges) o += "edges = false\n";
   for (const auto& m : c.materials) {
     o += fmt::format("\n[[material]]\nname = {}\nregions = [", q(m.name));
     for (std::size_t i = 0; i < m.regions.size(); ++i) o += (i ? ", " : "") + q(m.regions[i]);

@@ -295,6 +295,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.near.reserve(npair);
   cs.near_group.reserve(npair + 1);
   cs.near_count.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
+  index_edge_pairs(m, cs);
 }
 
 ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta, double omega2_max) {
@@ -348,6 +349,7 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
     }
   }
   for (auto& k : cs.kc) k *= cfg.stiffness_factor;
+  cs.edges = cfg.edges && m.dim == 3;
   // Friction per region pair.
   cs.nreg = static_cast<int>(m.region_names.size());
   cs.mu.assign(static_cast<std::size_t>(cs.nreg) * cs.nreg, 0.0);
@@ -416,7 +418,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (due) rebuild(m, cs);
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
   if (npair == 0) {
-    cs.active = 0;
+    std::int64_t none = 0;
+    double pen = 0;
+    if (cs.edges) edge_contact_forces(m, cs, dt, none, pen);  // (closes what the edges held)
+    cs.active = none;
     return;
   }
   const double zeta = cs.cfg.damping_ratio;
@@ -721,6 +726,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     cs.pair_force[p] = force;
     cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
   }
+  // (c') edge-to-edge contacts (3D), their forces added to f first, in their list's order
+  if (cs.edges) edge_contact_forces(m, cs, dt, active, pen_ratio);
   cs.active = active;
   cs.active_max = std::max(cs.active_max, active);
   cs.max_pen_ratio = std::max(cs.max_pen_ratio, pen_ratio);
@@ -768,12 +775,16 @@ double contact_energy(const ContactSet& cs) {
     e += 0.5 * k * cs.pair_gap[p] * cs.pair_gap[p] +
          (kt > 0 ? 0.5 * dot(cs.pair_ft[p], cs.pair_ft[p]) / kt : 0.0);
   }
+  for (std::size_t i = 0; i < cs.ec_gap.size(); ++i)
+    e += 0.5 * cs.ec_k[i] * cs.ec_gap[i] * cs.ec_gap[i] +
+         0.5 * dot(cs.ec_ft[i], cs.ec_ft[i]) / (cs.shear_ratio * cs.ec_k[i]);
   return e;
 }
 
 double contact_dissipated(const ContactSet& cs) {
-  double d = cs.diss_closed;
+  double d = cs.diss_closed + cs.ec_diss_closed;
   for (double x : cs.pair_diss) d += x;
+  for (double x : cs.ec_diss) d += x;
   return d;
 }
 

@@ -58,6 +58,8 @@ struct ContactSettings {
   // candidates = "cracked": the faces of interfaces with a broken point are candidates too, not
   // only released ones (no fragment passes into another; several times the contact cost)
   bool cracked_faces = false;
+  // 3D: crossing edges of candidate faces push apart too (contact_edges.cpp)
+  bool edges = true;
 };
 
 // A candidate block's geometry this step: its bounding sphere grown for the quick reject
@@ -122,6 +124,25 @@ struct ContactSet {
   std::vector<std::uint8_t> on_released;
   std::vector<std::uint8_t> face_cand;   // per face slot: 1 when a candidate face
 
+  // ---- edge-to-edge contact (3D, contact_edges.cpp) ----
+  bool edges = false;
+  // the block pairs (a < b, of different bodies, sorted) whose edges are tested (rebuilt), per
+  // pair this step's contact count (prefix sums) and the range of its contacts of the last step
+  std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
+  std::vector<std::int64_t> bp_count, bp_prev;
+  // the edge contacts holding something, sorted by (a, b, key = 6 edge of a + edge of b): the
+  // ignored depth, the penetration beyond it, the stiffness, the dissipation so far, the force
+  // on a's edge, and the weights of the closest points on a's edge (s) and on b's (t)
+  std::vector<std::int32_t> ec_a, ec_b, ec_key;
+  std::vector<double> ec_d0, ec_gap, ec_k, ec_diss, ec_s, ec_t;
+  std::vector<Vec3> ec_force, ec_ft;  // (ec_ft: the tangential part, friction's spring)
+  std::vector<std::int32_t> ecn_a, ecn_b, ecn_key;  // this step's list, swapped in at its end
+  std::vector<double> ecn_d0, ecn_gap, ecn_k, ecn_diss, ecn_s, ecn_t;
+  std::vector<Vec3> ecn_force, ecn_ft;
+  std::vector<std::uint8_t> ec_matched;
+  double ec_diss_closed = 0;
+  std::int64_t ec_active = 0, ec_active_max = 0;
+
   // ---- state and statistics ----
   std::int64_t released_seen = -1;       // Model::released_points at the last build
   double release_drift = 0;              // since points were released after the last build:
@@ -143,6 +164,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt);
 // Rebuilds what is derived from the pairs (the distinct blocks, the step's work lists, their
 // capacities): at every rebuild, and after the pairs were loaded from a checkpoint.
 void index_pairs(const Model& m, ContactSet& cs);
+
+// Edge-to-edge contact (3D): the block pairs to test, from the pairs (at each rebuild and after
+// loading), and one step's forces added to m.f (its contacts counted into active, its largest
+// penetration / block size into pen_ratio).
+void index_edge_pairs(const Model& m, ContactSet& cs);
+void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& active, double& pen_ratio);
 
 // Elastic energy stored in the contacts (J) and their dissipation so far (J).
 double contact_energy(const ContactSet& cs);

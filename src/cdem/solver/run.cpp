@@ -533,6 +533,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"contact_candidate_pairs", std::to_string(sim.contact().pair_node.size())},
       {"contact_buffer_pairs", std::to_string(sim.contact().pair_capacity())},
       {"contact_rebuilds", std::to_string(sim.contact().rebuilds)},
+      {"contact_edge_pairs_max", std::to_string(sim.contact().ec_active_max)},
       {"contact_max_penetration_ratio", json_number(sim.contact().max_pen_ratio)},
       {"contact_energy", json_number(last.contact_strain)},
       {"contact_dissipated", json_number(last.contact_friction)},

@@ -75,6 +75,22 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.active", cs.active);
   ar.io("contact.active_max", cs.active_max);
   ar.io("contact.max_pen_ratio", cs.max_pen_ratio);
+  // the edge contacts (absent in checkpoints written before they existed: none then)
+  if (!ar.loading() || ar.has("contact.ec_a")) {
+    ar.io("contact.ec_a", cs.ec_a);
+    ar.io("contact.ec_b", cs.ec_b);
+    ar.io("contact.ec_key", cs.ec_key);
+    ar.io("contact.ec_d0", cs.ec_d0);
+    ar.io("contact.ec_gap", cs.ec_gap);
+    ar.io("contact.ec_k", cs.ec_k);
+    ar.io("contact.ec_diss", cs.ec_diss);
+    ar.io("contact.ec_s", cs.ec_s);
+    ar.io("contact.ec_t", cs.ec_t);
+    ar.io("contact.ec_force", cs.ec_force);
+    ar.io("contact.ec_ft", cs.ec_ft);
+    ar.io("contact.ec_diss_closed", cs.ec_diss_closed);
+    ar.io("contact.ec_active_max", cs.ec_active_max);
+  }
   // (the lists derived from the pairs and the step's per-pair geometry, recomputed before it is
   // read, are not stored: index_pairs sizes them after loading, Simulation::io_state)
   // the pair buffers' size (grown at rebuilds only; summary.json reports it)

@@ -25,8 +25,9 @@
 //
 // Which block pairs: those with a node-to-block candidate pair either way, of different bodies,
 // both tetrahedra (index_edge_pairs, at each rebuild). Each step, per block pair in parallel: a
-// bounding-sphere test of the two blocks, then per edge pair a sphere test of the two edges,
-// then the closest points. Two passes (count, then fill at fixed offsets) keep the contact list
+// bounding-sphere test of the two blocks, a separating face plane (all four nodes of one in
+// front of a face of the other: they cannot overlap), then per edge pair a sphere test of the
+// two edges, then the closest points. Two passes (count, then fill at fixed offsets) keep the contact list
 // sorted by (block pair, edge, edge) for any thread count; the forces are gathered serially in
 // that order: bitwise the same for any thread count.
 #include <omp.h>
@@ -78,6 +79,26 @@ void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g) 
   for (int e = 0; e < 6; ++e)
     if (cs.face_cand[4 * b + kTetEdgeFaces[e][0]] || cs.face_cand[4 * b + kTetEdgeFaces[e][1]])
       g.cand_edges |= 1 << e;
+}
+
+// The block's centroid and bounding radius (the first, cheap test of a block pair).
+void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
+  const std::int32_t n0 = m.block_first_node[b];
+  c = 0.25 * (m.x[n0] + m.x[n0 + 1] + m.x[n0 + 2] + m.x[n0 + 3]);
+  double r2 = 0;
+  for (int i = 0; i < 4; ++i) r2 = std::max(r2, dot(m.x[n0 + i] - c, m.x[n0 + i] - c));
+  r = std::sqrt(r2);
+}
+
+// Is every node of S in front of one face plane of G (beyond tol)? Then the two tetrahedra
+// do not overlap and no edge of either is inside the other.
+bool separated(const TetGeom& G, const TetGeom& S) {
+  for (int k = 0; k < 4; ++k) {
+    bool all = true;
+    for (int i = 0; i < 4 && all; ++i) all = dot(S.x[i] - G.a0[k], G.n[k]) > G.tol;
+    if (all) return true;
+  }
+  return false;
 }
 
 bool inside(const TetGeom& g, const Vec3& p) {
@@ -196,16 +217,25 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
 #pragma omp parallel for schedule(static)
   for (std::int64_t j = 0; j < nbp; ++j) {
     const std::int32_t a = cs.bp_a[j], b = cs.bp_b[j];
-    TetGeom A, B;
-    tet_geom(m, cs, a, A);
-    tet_geom(m, cs, b, B);
-    std::int32_t count = 0;
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
-    const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r);
-    if (!near && plo == phi) {
+    Vec3 ca, cb;
+    double ra = 0, rb = 0;
+    tet_sphere(m, a, ca, ra);
+    tet_sphere(m, b, cb, rb);
+    bool near = dot(ca - cb, ca - cb) <= (ra + rb) * (ra + rb);
+    if (!near && plo == phi) {  // (most pairs: blocks apart)
       cs.bp_count[j + 1] = 0;
       continue;
     }
+    TetGeom A, B;
+    tet_geom(m, cs, a, A);
+    tet_geom(m, cs, b, B);
+    near = near && (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B) && !separated(B, A);
+    if (!near && plo == phi) {  // (most of the rest: blocks side by side across a crack)
+      cs.bp_count[j + 1] = 0;
+      continue;
+    }
+    std::int32_t count = 0;
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (A.cand_edges >> ea & 1) && (B.cand_edges >> eb & 1);
@@ -243,7 +273,9 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     tet_geom(m, cs, b, B);
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
     auto o = static_cast<std::size_t>(cs.bp_count[j]);
-    const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r);
+    const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r) &&
+                      (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B) &&
+                      !separated(B, A);
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (A.cand_edges >> ea & 1) && (B.cand_edges >> eb & 1);

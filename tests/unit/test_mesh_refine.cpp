@@ -143,7 +143,9 @@ double facet_edge(const Mesh& m, const std::string& set) {
 
 // The pile-pit situation (SPEC 5.3): an empty hole of 40 mm refined to 12 mm. circle_segments =
 // 16 alone would make its wall 2 pi 0.02 / 16 = 7.9 mm.
-TEST(MeshRefine, WallSizingRefineKeepsTheRequestedSizeAtACurvedWall) {
+// A 0.6 x 0.6 x 0.4 m box with a 40 mm hole 0.3 m deep, refined along its axis to `size` within
+// `radius`, wall_sizing "refine".
+GenerateSpec box_with_refined_hole(double size, double radius, double grading) {
   GenerateSpec s;
   s.shape = "box";
   s.size = {0.6, 0.6, 0.4};
@@ -152,11 +154,16 @@ TEST(MeshRefine, WallSizingRefineKeepsTheRequestedSizeAtACurvedWall) {
   RefineSpec r;
   r.point = {0.3, 0.3, 0.4};
   r.to = Vec3{0.3, 0.3, 0.1};
-  r.size = 0.012;
-  r.radius = 0.03;
-  r.grading = 1.0;
+  r.size = size;
+  r.radius = radius;
+  r.grading = grading;
   s.refine = {r};
   s.wall_sizing = "refine";
+  return s;
+}
+
+TEST(MeshRefine, WallSizingRefineKeepsTheRequestedSizeAtACurvedWall) {
+  GenerateSpec s = box_with_refined_hole(0.012, 0.03, 1.0);
   const double wall = facet_edge(generate_mesh(s), "hole0");
   EXPECT_NEAR(wall, 0.012, 0.25 * 0.012);
   s.wall_sizing = "finest";  // the curvature rule wins: smaller than asked
@@ -177,18 +184,7 @@ TEST(MeshRefine, WallSizingRefineKeepsTheRequestedSizeAtACurvedWall) {
 // 50 mm zone, 2.5 segments around, kept Gmsh busy for over ten minutes with 8 GB.) Away from the
 // hole, or with "finest", the same zone is accepted.
 TEST(MeshRefine, ZoneTooCoarseForAHoleWallIsRefused) {
-  GenerateSpec s;
-  s.shape = "box";
-  s.size = {0.6, 0.6, 0.4};
-  s.element_size = 0.1;
-  s.holes = {HoleSpec{{0.3, 0.3, 0.4}, 0.02, {0, 0, -1}, 0.3, ""}};
-  RefineSpec r;
-  r.point = {0.3, 0.3, 0.4};
-  r.to = Vec3{0.3, 0.3, 0.1};
-  r.size = 0.05;
-  r.radius = 0.06;
-  s.refine = {r};
-  s.wall_sizing = "refine";
+  GenerateSpec s = box_with_refined_hole(0.05, 0.06, 0.0);
   try {
     generate_mesh(s);
     ADD_FAILURE() << "a 50 mm zone on a 40 mm hole's wall was accepted";

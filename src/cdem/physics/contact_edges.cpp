@@ -143,6 +143,23 @@ bool edge_hit(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit& h) {
 
 inline std::int32_t edge_key(int ea, int eb) { return 6 * ea + eb; }
 
+// f(last step's array, this step's array) for every per-contact array of the edge contacts: the
+// list is resized, compacted and swapped through this one list of its fields.
+template <class F>
+void for_each_edge_array(ContactSet& cs, F&& f) {
+  f(cs.ec_a, cs.ecn_a);
+  f(cs.ec_b, cs.ecn_b);
+  f(cs.ec_key, cs.ecn_key);
+  f(cs.ec_d0, cs.ecn_d0);
+  f(cs.ec_gap, cs.ecn_gap);
+  f(cs.ec_k, cs.ecn_k);
+  f(cs.ec_diss, cs.ecn_diss);
+  f(cs.ec_s, cs.ecn_s);
+  f(cs.ec_t, cs.ecn_t);
+  f(cs.ec_force, cs.ecn_force);
+  f(cs.ec_ft, cs.ecn_ft);
+}
+
 // An edge contact's stiffness, as a share of its nodes' smallest contact stiffness: a node is an
 // end of three edges of its tet, each of which may cross several edges at once where faces lie
 // on faces (a cube on a finer base: 12 crossings under 4 nodes), beside its own node-to-face
@@ -186,12 +203,7 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
   // room for the contacts without allocating in a step (grown only if a step needs more)
   const std::size_t room = std::max<std::size_t>(64, 2 * static_cast<std::size_t>(cs.ec_active_max));
-  for (auto* v : {&cs.ecn_a, &cs.ecn_b, &cs.ecn_key}) v->reserve(room);
-  for (auto* v : {&cs.ecn_d0, &cs.ecn_gap, &cs.ecn_k, &cs.ecn_diss}) v->reserve(room);
-  cs.ecn_force.reserve(room);
-  cs.ecn_ft.reserve(room);
-  cs.ecn_s.reserve(room);
-  cs.ecn_t.reserve(room);
+  for_each_edge_array(cs, [&](auto&, auto& now) { now.reserve(room); });
 }
 
 void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& active, double& pen_ratio) {
@@ -250,17 +262,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   }
   for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
   const auto nec = static_cast<std::size_t>(cs.bp_count[nbp]);
-  cs.ecn_a.resize(nec);
-  cs.ecn_b.resize(nec);
-  cs.ecn_key.resize(nec);
-  cs.ecn_d0.resize(nec);
-  cs.ecn_gap.resize(nec);
-  cs.ecn_k.resize(nec);
-  cs.ecn_diss.resize(nec);
-  cs.ecn_force.resize(nec);
-  cs.ecn_ft.resize(nec);
-  cs.ecn_s.resize(nec);
-  cs.ecn_t.resize(nec);
+  for_each_edge_array(cs, [&](auto&, auto& now) { now.resize(nec); });
   std::int64_t act = 0;
   double pen = 0;
   // (2) the same tests again, now writing each contact at its offset with its force and energy
@@ -394,34 +396,13 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       cs.ec_diss_closed += cs.ecn_diss[i];
       continue;
     }
-    cs.ecn_a[w] = cs.ecn_a[i];
-    cs.ecn_b[w] = cs.ecn_b[i];
-    cs.ecn_key[w] = cs.ecn_key[i];
-    cs.ecn_d0[w] = cs.ecn_d0[i];
-    cs.ecn_gap[w] = cs.ecn_gap[i];
-    cs.ecn_k[w] = cs.ecn_k[i];
-    cs.ecn_diss[w] = cs.ecn_diss[i];
-    cs.ecn_force[w] = cs.ecn_force[i];
-    cs.ecn_ft[w] = cs.ecn_ft[i];
-    cs.ecn_s[w] = cs.ecn_s[i];
-    cs.ecn_t[w] = cs.ecn_t[i];
+    for_each_edge_array(cs, [&](auto&, auto& now) { now[w] = now[i]; });
     ++w;
   }
-  for (auto* v : {&cs.ecn_a, &cs.ecn_b, &cs.ecn_key}) v->resize(w);
-  for (auto* v : {&cs.ecn_d0, &cs.ecn_gap, &cs.ecn_k, &cs.ecn_diss, &cs.ecn_s, &cs.ecn_t}) v->resize(w);
-  cs.ecn_force.resize(w);
-  cs.ecn_ft.resize(w);
-  cs.ec_ft.swap(cs.ecn_ft);
-  cs.ec_a.swap(cs.ecn_a);
-  cs.ec_b.swap(cs.ecn_b);
-  cs.ec_key.swap(cs.ecn_key);
-  cs.ec_d0.swap(cs.ecn_d0);
-  cs.ec_gap.swap(cs.ecn_gap);
-  cs.ec_k.swap(cs.ecn_k);
-  cs.ec_diss.swap(cs.ecn_diss);
-  cs.ec_force.swap(cs.ecn_force);
-  cs.ec_s.swap(cs.ecn_s);
-  cs.ec_t.swap(cs.ecn_t);
+  for_each_edge_array(cs, [&](auto& last, auto& now) {
+    now.resize(w);
+    last.swap(now);
+  });
   cs.ec_active = static_cast<std::int64_t>(w);
   cs.ec_active_max = std::max(cs.ec_active_max, cs.ec_active);
 }

@@ -227,6 +227,12 @@ class Study:
         self.compare = data.get("compare", {})
         self.design = data.get("design")
         self.recommend = data.get("recommend", {})
+        if not isinstance(self.recommend, dict):
+            raise StudyError(f"{path}: [recommend] must be a table")
+        bad = [k for k in self.recommend if k not in ("tolerance", "speed_quantile", "rise_quantile")]
+        if bad:
+            raise StudyError(f"{path}: [recommend] unknown key(s) {', '.join(bad)} (known: "
+                             "tolerance, speed_quantile, rise_quantile)")
         self.analysis = data.get("analysis", {})
         for v in self.variants:
             if not os.path.isfile(v.case):
@@ -396,6 +402,34 @@ def passing_sizes(sizes, volumes, pcts=(10, 20, 30, 40, 50, 60, 70, 80, 90)):
     return {f"d{p}_m": float(np.interp(p, cum, s)) for p in pcts}, s, cum
 
 
+def weighted_quantile(values, weights, q):
+    """The smallest value v with a share of at least q of the total weight at or below it
+    (None without data): the volume-weighted quantile the fly-rock criteria use."""
+    v = np.asarray(values, float).ravel()
+    w = np.asarray(weights, float).ravel()
+    ok = np.isfinite(v) & np.isfinite(w) & (w > 0)
+    if not ok.any():
+        return None
+    o = np.argsort(v[ok], kind="stable")
+    v, w = v[ok][o], w[ok][o]
+    c = np.cumsum(w)
+    i = int(np.searchsorted(c, q * c[-1], side="left"))
+    return float(v[min(i, v.size - 1)])
+
+
+def fly_rock_quantiles(study):
+    """([recommend] speed_quantile, rise_quantile): defaults 0.95 and 0.99, each in (0, 1]."""
+    rec = study.recommend if study is not None else {}
+    out = []
+    for key, default in (("speed_quantile", 0.95), ("rise_quantile", 0.99)):
+        q = rec.get(key, default)
+        if isinstance(q, bool) or not isinstance(q, (int, float)) or not (0 < q <= 1):
+            raise StudyError(f"{study.path}: [recommend] {key} = {q!r}: expected a number in "
+                             "(0, 1] (the share of the volume at or below the value)")
+        out.append(float(q))
+    return tuple(out)
+
+
 def measure_variant(v, study, notes):
     """Every number the comparison needs of one variant (a dict; see docs/study.md)."""
     run, st = v.run, v.setup
@@ -432,33 +466,49 @@ def measure_variant(v, study, notes):
                          if k in e}
         out["energy"]["time_s"] = float(e["time"][-1])
         out["energy"]["per_metre"] = two_d
-    # Fly-rock: the largest displacement along up over every output; launch speeds.
-    fly = {"max_vertical_displacement_m": None, "time_s": None, "max_displacement_m": None}
-    speeds_all = []
+    # Fly-rock: per output the fragments' speeds and the rock's rise (displacement along up),
+    # each as its largest value and as the robust quantile the recommendation uses: the value
+    # exceeded by a share 1 - q of the moving fragments' volume (speed) or of the rock's volume
+    # (rise), so that a few tiny, numerically ejected fragments do not decide.
+    qs, qr = fly_rock_quantiles(study)
+    fly = {"max_vertical_displacement_m": None, "time_s": None, "max_displacement_m": None,
+           "speed_quantile": qs, "rise_quantile": qr}
+    speeds_all, speeds_q, rises_q = [], [], []
     last = None
+    from .geometry import cell_node_lists
     for i in range(len(run.fields)):
         frs = load_frames(run, [i], 1.0, notes)
         if not frs:
             continue
         f = frs[0]
         last = f
-        uz = vertical(f, run)
+        uz_all = vertical(f, run)
+        rock_node = np.ones(uz_all.size, bool)
+        rock_cell = np.ones(f.grid.ncells, bool)
         if st is not None and st.measures is not None and st.charge_cell.size == f.grid.ncells:
-            from .geometry import cell_node_lists
-            rock_node = np.ones(uz.size, bool)  # the charge's own blocks are not fly-rock
+            rock_cell = ~st.charge_cell  # the charge's own blocks are not fly-rock
             for ids, nodes in cell_node_lists(f.grid):
                 rock_node[nodes[st.charge_cell[ids]].ravel()] = False
-            uz = uz[rock_node]
+        uz = uz_all[rock_node]
         if uz.size and (fly["max_vertical_displacement_m"] is None
                         or uz.max() > fly["max_vertical_displacement_m"]):
             fly["max_vertical_displacement_m"] = float(uz.max())
             fly["time_s"] = f.time
+        # the rise of each rock block: the mean of its nodes', weighted by its volume
+        cell_uz = np.full(f.grid.ncells, np.nan)
+        for ids, nodes in cell_node_lists(f.grid):
+            cell_uz[ids] = uz_all[nodes].mean(1)
+        vol = block_measures(f.X, f.grid)["volume"]
+        r = weighted_quantile(cell_uz[rock_cell], vol[rock_cell], qr)
+        if r is not None:
+            rises_q.append((f.time, r))
         mag = float(np.linalg.norm(f.u, axis=1).max()) if f.u.size else None
         if mag is not None and (fly["max_displacement_m"] is None or mag > fly["max_displacement_m"]):
             fly["max_displacement_m"] = mag
-        sp, _vz, _vol, src = launch_speeds(run, f, st)
+        sp, _vz, fvol, src = launch_speeds(run, f, st)
         if sp is not None and sp.size:
             speeds_all.append((f.time, float(sp.max())))
+            speeds_q.append((f.time, weighted_quantile(sp, fvol, qs)))
     if last is not None:
         sp, vz, vol, src = launch_speeds(run, last, st)
         if sp is not None:
@@ -470,8 +520,12 @@ def measure_variant(v, study, notes):
             fly["median_launch_speed_m_s"] = float(np.median(sp)) if sp.size else 0.0
             fly["max_upward_speed_m_s"] = float(vz.max()) if vz.size else 0.0
     fly["max_launch_speed_by_output"] = speeds_all
+    fly["quantile_launch_speed_by_output"] = speeds_q
+    fly["quantile_rise_by_output"] = rises_q
     if speeds_all:
         fly["max_launch_speed_any_output_m_s"] = max(x for _, x in speeds_all)
+    fly["quantile_launch_speed_m_s"] = max((x for _, x in speeds_q), default=None)
+    fly["quantile_rise_m"] = max((x for _, x in rises_q), default=None)
     out["fly_rock"] = fly
     # Monitors: peak displacement along up.
     mons = {}
@@ -574,10 +628,13 @@ def recommend(measures, study):
              else "over the rock (per-region fracture degree of the main region when fracture.csv "
                   "has it, else the whole model; no design funnel given)")
     goals = []
-    c1 = [("largest fragment launch speed at the last output (m/s), lower is better",
-           fly("max_launch_speed_m_s"), False),
-          ("largest displacement along up over every output (m), lower is better",
-           fly("max_vertical_displacement_m"), False)]
+    qs, qr = fly_rock_quantiles(study)
+    c1 = [(f"fragment launch speed exceeded by {100 * (1 - qs):g} % of the moving fragments' volume, "
+           "largest over the outputs (m/s), lower is better",
+           fly("quantile_launch_speed_m_s"), False),
+          (f"rise (displacement along up) exceeded by {100 * (1 - qr):g} % of the rock's volume, "
+           "largest over the outputs (m), lower is better",
+           fly("quantile_rise_m"), False)]
     c2 = [(f"fracture degree {where}, higher is better",
            in_design("fracture_degree", region_fd), True),
           (f"d80 {where} (m), lower is better",
@@ -599,7 +656,7 @@ def recommend(measures, study):
             (f"no clear winner: {', '.join(tied)} are within {100 * tol:g} % on every criterion"
              if len(tied) > 1 else "no data"),
         })
-    most = fly("max_launch_speed_m_s")
+    most = fly("quantile_launch_speed_m_s")
     known = {n: x for n, x in most.items() if x is not None}
     extra = {"most_fly_rock": max(known, key=known.get) if known else None}
     return {"tolerance": tol, "goals": goals, **extra}
@@ -794,13 +851,22 @@ def plot_launch_speeds(measures, out_dir, written):
         if by:
             t = np.array([b[0] for b in by])
             tf, tu = plots.time_scale(float(t.max()))
-            a2.plot(t * tf, [b[1] for b in by], "o-", color=colors[i], ms=4, label=m["label"])
+            a2.plot(t * tf, [b[1] for b in by], "o-", color=colors[i], ms=4,
+                    label=f"{m['label']}: largest")
             a2.set_xlabel(f"time ({tu})")
+        qb = m["fly_rock"].get("quantile_launch_speed_by_output") or []
+        if qb:
+            t = np.array([b[0] for b in qb])
+            tf, _ = plots.time_scale(float(t.max()))
+            q = m["fly_rock"].get("speed_quantile", 0.95)
+            a2.plot(t * tf, [b[1] for b in qb], "s--", color=colors[i], ms=3,
+                    label=f"{m['label']}: {100 * q:g} % of the fragments' volume below")
     a1.set_xlabel("fragment speed (m/s)")
     a1.set_ylabel("fragments at or below the speed (%)")
     a1.set_title("Fragment speeds at the last output (main rock mass left out)", fontsize=10)
     a1.legend(fontsize=8)
-    a2.set_ylabel("largest fragment speed (m/s)")
+    a2.set_ylabel("fragment speed (m/s)")
+    a2.set_yscale("log")
     a2.set_title("Largest fragment speed at each output", fontsize=10)
     a2.legend(fontsize=8)
     return save(fig, out_dir, "launch_speeds.png", written)
@@ -913,6 +979,8 @@ def tables(measures, rec, study):
         ["footage", "m"] + [fmtv(m["funnel"]["footage_m"]) for m in measures],
         ["funnel broken volume", vol_u] + [fmtv(m["funnel"]["broken_volume"]) for m in measures],
         ["max displacement along up (fields)", "m"] + [fmtv(m["fly_rock"]["max_vertical_displacement_m"]) for m in measures],
+        ["rise exceeded by the top share of the rock volume (criterion)", "m"] + [fmtv(m["fly_rock"].get("quantile_rise_m")) for m in measures],
+        ["fragment speed exceeded by the top share of the fragments' volume (criterion)", "m/s"] + [fmtv(m["fly_rock"].get("quantile_launch_speed_m_s")) for m in measures],
         ["max fragment speed, last output", "m/s"] + [fmtv(m["fly_rock"].get("max_launch_speed_m_s")) for m in measures],
         ["90th percentile fragment speed", "m/s"] + [fmtv(m["fly_rock"].get("p90_launch_speed_m_s")) for m in measures],
         ["max upward fragment speed", "m/s"] + [fmtv(m["fly_rock"].get("max_upward_speed_m_s")) for m in measures],

@@ -52,6 +52,54 @@ class Recommendation(unittest.TestCase):
         self.assertEqual(trail[-1], ["a", "b"])
 
 
+class FlyRockQuantiles(unittest.TestCase):
+    def test_weighted_quantile(self):
+        # four fragments: 1 m3 at 1 m/s, 1 m3 at 2 m/s, 1.9 m3 at 3 m/s, and a 1e-4 m3 splinter
+        # at 2 780 m/s (the kind of outlier that decided the coarse SPEC 5.3 study)
+        sp = np.array([2780.0, 1.0, 3.0, 2.0])
+        vol = np.array([1e-4, 1.0, 1.9, 1.0])
+        self.assertEqual(st.weighted_quantile(sp, vol, 0.95), 3.0)  # the splinter is < 5 %
+        self.assertEqual(st.weighted_quantile(sp, vol, 1.0), 2780.0)  # q = 1: the largest
+        self.assertEqual(st.weighted_quantile(sp, vol, 0.5), 2.0)   # 2 of 3.9 m3 at <= 2 m/s
+        self.assertEqual(st.weighted_quantile(sp, vol, 0.25), 1.0)
+        # equal weights: the order statistic ceil(q n)
+        self.assertEqual(st.weighted_quantile(np.arange(1.0, 11.0), np.ones(10), 0.9), 9.0)
+        # no data, NaN and zero weights are left out
+        self.assertIsNone(st.weighted_quantile([], [], 0.9))
+        self.assertEqual(st.weighted_quantile([np.nan, 5.0, 7.0], [1.0, 1.0, 0.0], 0.99), 5.0)
+
+    def test_quantile_keys_are_checked(self):
+        class S:
+            path = "study.toml"
+            recommend = {}
+        self.assertEqual(st.fly_rock_quantiles(S()), (0.95, 0.99))
+        S.recommend = {"speed_quantile": 0.9, "rise_quantile": 1}
+        self.assertEqual(st.fly_rock_quantiles(S()), (0.9, 1.0))
+        for bad in (0, 1.5, "0.9", True, -0.1):
+            S.recommend = {"speed_quantile": bad}
+            with self.assertRaisesRegex(st.StudyError, r"\[recommend\] speed_quantile"):
+                st.fly_rock_quantiles(S())
+
+    def test_an_outlier_does_not_decide_the_fly_rock_goal(self):
+        def measure(name, q_speed, max_speed, q_rise):
+            return {"name": name, "label": name, "design_funnel": None,
+                    "grading": {"d80_m": 0.2, "d40_m": 0.1},
+                    "fracture_degree": {"total": 0.9, "by_region": None},
+                    "fly_rock": {"quantile_launch_speed_m_s": q_speed,
+                                 "max_launch_speed_m_s": max_speed, "quantile_rise_m": q_rise}}
+
+        class S:
+            path = "study.toml"
+            recommend = {}
+            design = None
+        # a throws its bulk faster; b has one splinter at 2 780 m/s
+        ms = [measure("a", 12.0, 40.0, 1.5), measure("b", 6.0, 2780.0, 0.8)]
+        rec = st.recommend(ms, S())
+        fly = next(g for g in rec["goals"] if g["goal"] == "limits fly-rock")
+        self.assertEqual(fly["winner"], "b")
+        self.assertEqual(rec["most_fly_rock"], "a")
+
+
 class Funnel(unittest.TestCase):
     def test_box_and_cylinder(self):
         pts = np.array([[0.5, 0.5, 0.0], [2.0, 0.5, 0.0], [0.0, 0.0, -0.5], [0.0, 0.0, -1.5],

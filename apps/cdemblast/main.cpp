@@ -221,6 +221,10 @@ int main(int argc, char** argv) {
                     "Warm up until this fraction of the spring points is broken (default 0.005; "
                     "larger: a later, more cracked state)")
       ->check(CLI::Range(0.0, 0.9));
+  bench->add_flag("--fragmented", bench_opt.fragmented,
+                  "After the warm-up release the broken points: fragments touching through "
+                  "contact (with --warmup-broken 0.3: a fragmented blast state)");
+  bench->add_flag("!--no-contact", bench_opt.contact, "General contact off (on by default, as in a case)");
   bench->add_flag("--json", bench_opt.json, "Print one JSON object");
 
   try {

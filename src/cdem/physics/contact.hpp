@@ -71,6 +71,16 @@ struct BlockPlanes {
   std::array<Vec3, 4> a0, n;
 };
 
+// A tetrahedron's geometry this step for the edge contacts (contact_edges.cpp): its nodes and
+// their velocities, per face a point and the outward unit normal, centroid, bounding radius, the
+// tolerance of "on a face", and the edges on candidate faces (bit e).
+struct TetGeom {
+  std::array<Vec3, 4> x, v, n, a0;
+  Vec3 c;
+  double r = 0, tol = 0;
+  int cand_edges = 0;
+};
+
 struct ContactSet {
   ContactSettings cfg;
   bool enabled = false;
@@ -130,6 +140,14 @@ struct ContactSet {
   // pair this step's contact count (prefix sums) and the range of its contacts of the last step
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
+  // the distinct blocks of the block pairs (ascending; rebuilt), each pair's two indices among
+  // them, and per block this step's bounding sphere (centre, radius), whether a pair needs its
+  // geometry, and that geometry (each computed once per step, not once per pair)
+  std::vector<std::int32_t> eb_block, bp_ia, bp_ib;
+  std::vector<Vec3> eb_c;
+  std::vector<double> eb_r;
+  std::vector<std::uint8_t> eb_need;
+  std::vector<TetGeom> eb_geom;
   // the edge contacts holding something, sorted by (a, b, key = 6 edge of a + edge of b): the
   // ignored depth, the penetration beyond it, the stiffness, the dissipation so far, the force
   // on a's edge, and the weights of the closest points on a's edge (s) and on b's (t)

@@ -23,6 +23,7 @@
 #include "cdem/physics/boundaries.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
+#include "cdem/physics/ties.hpp"
 #include "cdem/solver/simulation.hpp"
 
 namespace cdem {
@@ -319,6 +320,8 @@ struct LoopResult {
   std::int64_t broken_end = 0;
   std::int64_t inverted = 0;  // inverted blocks summed over the steps (expected 0)
   double work = 0;            // boundary + explosive work, absorbed energy (J)
+  std::int64_t pairs = 0, active_max = 0, rebuilds = 0;  // contact at the end: candidate pairs,
+                                                         // most in contact, rebuilds in the loop
 };
 
 double process_cpu_seconds() {
@@ -335,6 +338,24 @@ double load_average() {
     std::fclose(f);
   }
   return l;
+}
+
+// The fragmented state (--fragmented): every spring point the warm-up broke is released, its
+// force zero, so the blocks between the cracks are fragments that touch only through general
+// contact (in a run a broken point is released once its pair has separated by half a block;
+// here at once, with the faces still touching: the densest contact state cracking can make).
+std::int64_t release_broken(Model& m) {
+  std::int64_t n = 0;
+  for (std::size_t s = 0; s < m.n_springs(); ++s) {
+    if (m.sp_state[s] != kBroken) continue;
+    if (m.tied && m.sp_tied[s]) untie_point(m, s);
+    m.sp_state[s] = kReleased;
+    m.sp_fn[s] = 0;
+    m.sp_fs[s] = Vec3{};
+    ++n;
+  }
+  m.released_points += n;
+  return n;
 }
 
 std::int64_t broken_springs(const Model& m) {
@@ -357,6 +378,7 @@ LoopResult timed_loop(const PreparedCase& snapshot, int steps, int threads) {
   pc.sim.step();
   pc.sim.step();
   pc.sim.set_timer(&times);
+  const std::int64_t rebuilds0 = pc.sim.contact().rebuilds;
   const double w0 = omp_get_wtime(), cpu0 = process_cpu_seconds();
   for (int s = 0; s < steps; ++s) {
     pc.sim.step();
@@ -366,6 +388,10 @@ LoopResult timed_loop(const PreparedCase& snapshot, int steps, int threads) {
   r.cpu = process_cpu_seconds() - cpu0;
   r.k = times.s;
   r.broken_end = broken_springs(pc.sim.model());
+  const ContactSet& cs = pc.sim.contact();
+  r.pairs = static_cast<std::int64_t>(cs.pair_node.size());
+  r.active_max = cs.active_max;
+  r.rebuilds = cs.rebuilds - rebuilds0;
   return r;
 }
 
@@ -387,7 +413,8 @@ int run_bench(const BenchOptions& opt) {
   const double h = 0.05;
   const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, opt.blocks));
   const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
-  const Case c = bench::box_case(3, extent, h, InterfaceLaw::MohrCoulomb, 1);
+  Case c = bench::box_case(3, extent, h, InterfaceLaw::MohrCoulomb, 1);
+  c.contact.enabled = opt.contact || opt.fragmented;
 
   const double load0 = load_average();
   const double setup0 = omp_get_wtime();
@@ -410,11 +437,16 @@ int run_bench(const BenchOptions& opt) {
       std::max<std::int64_t>(1, static_cast<std::int64_t>(opt.warmup_broken * nsp));
   const std::int64_t max_warm = (20LL * steps + 2000) * (opt.warmup_broken > 0.005 ? 10 : 1);
   const double warm0 = omp_get_wtime();
-  std::int64_t warm_steps = 0, broken0 = 0;
+  std::int64_t warm_steps = 0, broken0 = 0, released = 0;
   while (warm_steps < max_warm) {
     sim.step();
     ++warm_steps;
     if (warm_steps % 10 == 0 && (broken0 = broken_springs(sim.model())) >= want_broken) break;
+  }
+  if (opt.fragmented) {
+    released = release_broken(sim.model());
+    sim.step();  // the contact pairs of the fragmented state are built in the warm-up
+    ++warm_steps;
   }
   broken0 = broken_springs(sim.model());
   const double warm_s = omp_get_wtime() - warm0;
@@ -477,13 +509,15 @@ int run_bench(const BenchOptions& opt) {
             "\"bandwidth_fraction_ws\": {:.4g}, \"polar_iterations\": {:.3g}, "
             "\"cpu_ns_per_block_step_1_thread\": {:.4g}, "
             "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
-            "\"load_average\": [{:.2f}, {:.2f}], \"kernels\": {{{}}}}}",
+            "\"load_average\": [{:.2f}, {:.2f}], \"contact\": {}, \"released\": {}, "
+            "\"contact_pairs\": {}, \"contact_active_max\": {}, \"kernels\": {{{}}}}}",
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
             warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
             r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup,
             static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
-            cpu_ns_block_1, share1, share2, load0, load1, kernels)
+            cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
+            rm.pairs, rm.active_max, kernels)
             .c_str());
     return 0;
   }
@@ -498,6 +532,18 @@ int run_bench(const BenchOptions& opt) {
       "one emulsion bar (40 mm, {} segments, {} loaded blocks); bottom fixed, sides "
       "non-reflecting\n",
       bars.n_segments(), bars.elem_block.size());
+  if (opt.fragmented)
+    out += fmt::format(
+        "  fragmented: the {} points broken in the warm-up are released (the blocks between the "
+        "cracks are fragments)\n",
+        released);
+  if (c.contact.enabled)
+    out += fmt::format(
+        "  general contact: {} candidate pairs, at most {} in contact, {} rebuilds in the timed "
+        "steps\n",
+        rm.pairs, rm.active_max, rm.rebuilds);
+  else
+    out += "  general contact off (--no-contact)\n";
   out += fmt::format("  set-up {:.2f} s; dt = {:.4g} s ({})\n", setup_s, dt, sim.stable().limit);
   out += fmt::format(
       "  warm-up: {} steps in {:.2f} s to t = {:.4g} s: {} spring points broken ({:.2f} %)\n",

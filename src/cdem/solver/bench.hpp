@@ -31,6 +31,10 @@ struct BenchOptions {
   bool json = false;            // one JSON object on stdout instead of the text report
   double warmup_broken = 0.005;  // warm up until this fraction of the spring points is broken
                                  // (a larger one times a later, more cracked blast state)
+  bool contact = true;           // general contact, on as in a case that can break
+  bool fragmented = false;       // after the warm-up the broken points are released: the
+                                 // blocks between the cracks are fragments touching through
+                                 // contact (with warmup_broken: how fragmented)
 };
 
 // Runs the benchmark and prints its report on stdout. Returns 0.

@@ -124,13 +124,18 @@ struct ContactSet {
   // node with near pairs the start of its run in `near` (+ end), per thread the counts
   std::vector<std::int32_t> near, near_group;
   std::vector<std::uint8_t> pair_near;
+  std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
+  // far pairs sleep (contact.cpp, kSleepRate): per node its path length since the last build,
+  // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
+  // at which it is tested again
+  std::vector<double> pair_wake, node_drift, cb_drift;
   std::vector<std::int64_t> near_count;
   // face-side gather: per node its slot in the step's sums (-1 none), the nodes touched, and
   // their sums (formed in pair order, then added)
   std::vector<std::int32_t> face_slot, face_touched;
   std::vector<Vec3> face_sum;
   // work space of the rebuild
-  std::vector<std::int32_t> body, bucket_offset, bucket_entry, scratch;
+  std::vector<std::int32_t> body, bucket_offset, bucket_entry;
   std::vector<std::uint8_t> on_released;
   std::vector<std::uint8_t> face_cand;   // per face slot: 1 when a candidate face
 

@@ -178,34 +178,51 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_a.clear();
   cs.bp_b.clear();
   if (!cs.edges || m.dim != 3) return;
-  std::vector<std::uint64_t> keys;
-  keys.reserve(cs.pair_node.size());
-  for (std::size_t p = 0; p < cs.pair_node.size(); ++p) {
-    const std::int32_t a = m.node_block(cs.pair_node[p]), b = cs.pair_block[p];
-    if (a == b || cs.body[a] == cs.body[b]) continue;
-    if (m.block_type[a] != ElemType::Tet4 || m.block_type[b] != ElemType::Tet4) continue;
-    const auto lo = static_cast<std::uint64_t>(std::min(a, b)), hi = static_cast<std::uint64_t>(std::max(a, b));
-    keys.push_back(lo << 32 | hi);
-  }
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  for (const auto k : keys) {
-    cs.bp_a.push_back(static_cast<std::int32_t>(k >> 32));
-    cs.bp_b.push_back(static_cast<std::int32_t>(k & 0xffffffffu));
-  }
-  cs.eb_block.assign(cs.bp_a.begin(), cs.bp_a.end());
-  cs.eb_block.insert(cs.eb_block.end(), cs.bp_b.begin(), cs.bp_b.end());
-  std::sort(cs.eb_block.begin(), cs.eb_block.end());
-  cs.eb_block.erase(std::unique(cs.eb_block.begin(), cs.eb_block.end()), cs.eb_block.end());
-  auto slot = [&](std::int32_t b) {
-    return static_cast<std::int32_t>(std::lower_bound(cs.eb_block.begin(), cs.eb_block.end(), b) -
-                                     cs.eb_block.begin());
+  // The block pairs (lo, hi) of the node pairs, ascending and distinct: a counting sort on lo
+  // (linear; the node pairs are sorted by node, so each node's block follows from the last one
+  // without a search), then each lo's few his sorted and made unique.
+  const std::size_t nb = m.n_blocks(), npair = cs.pair_node.size();
+  std::vector<std::int32_t> off(nb + 1, 0), his;
+  auto for_each_pair = [&](auto&& fn) {
+    std::int32_t a = 0;
+    for (std::size_t p = 0; p < npair; ++p) {
+      const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+      while (m.block_first_node[a + 1] <= n) ++a;
+      if (a == b || cs.body[a] == cs.body[b]) continue;
+      if (m.block_type[a] != ElemType::Tet4 || m.block_type[b] != ElemType::Tet4) continue;
+      fn(std::min(a, b), std::max(a, b));
+    }
   };
+  for_each_pair([&](std::int32_t lo, std::int32_t) { ++off[lo + 1]; });
+  for (std::size_t b = 0; b < nb; ++b) off[b + 1] += off[b];
+  his.resize(static_cast<std::size_t>(off[nb]));
+  {
+    std::vector<std::int32_t> fill(off.begin(), off.end() - 1);
+    for_each_pair([&](std::int32_t lo, std::int32_t hi) { his[fill[lo]++] = hi; });
+  }
+  for (std::size_t lo = 0; lo < nb; ++lo) {
+    const auto first = his.begin() + off[lo], last = his.begin() + off[lo + 1];
+    std::sort(first, last);
+    for (auto it = first; it != last; ++it)
+      if (it == first || *it != *(it - 1)) {
+        cs.bp_a.push_back(static_cast<std::int32_t>(lo));
+        cs.bp_b.push_back(*it);
+      }
+  }
+  // the distinct blocks, ascending, and each pair's two slots among them (off reused: the slot)
+  std::fill(off.begin(), off.end(), -1);
+  for (std::size_t j = 0; j < cs.bp_a.size(); ++j) off[cs.bp_a[j]] = off[cs.bp_b[j]] = 0;
+  cs.eb_block.clear();
+  for (std::size_t b = 0; b < nb; ++b)
+    if (off[b] == 0) {
+      off[b] = static_cast<std::int32_t>(cs.eb_block.size());
+      cs.eb_block.push_back(static_cast<std::int32_t>(b));
+    }
   cs.bp_ia.resize(cs.bp_a.size());
   cs.bp_ib.resize(cs.bp_a.size());
   for (std::size_t j = 0; j < cs.bp_a.size(); ++j) {
-    cs.bp_ia[j] = slot(cs.bp_a[j]);
-    cs.bp_ib[j] = slot(cs.bp_b[j]);
+    cs.bp_ia[j] = off[cs.bp_a[j]];
+    cs.bp_ib[j] = off[cs.bp_b[j]];
   }
   const std::size_t neb = cs.eb_block.size();
   cs.eb_c.resize(neb);

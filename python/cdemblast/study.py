@@ -839,7 +839,7 @@ def plot_launch_speeds(measures, out_dir, written):
     have = [m for m in measures if m["fly_rock"].get("launch_speeds_m_s")]
     if not have:
         return None
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.6), constrained_layout=True)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 6.2), constrained_layout=True)
     colors = plots.run_colors(len(measures))
     for i, m in enumerate(measures):
         sp = m["fly_rock"].get("launch_speeds_m_s")
@@ -864,11 +864,11 @@ def plot_launch_speeds(measures, out_dir, written):
     a1.set_xlabel("fragment speed (m/s)")
     a1.set_ylabel("fragments at or below the speed (%)")
     a1.set_title("Fragment speeds at the last output (main rock mass left out)", fontsize=10)
-    a1.legend(fontsize=8)
+    a1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14))
     a2.set_ylabel("fragment speed (m/s)")
     a2.set_yscale("log")
-    a2.set_title("Largest fragment speed at each output", fontsize=10)
-    a2.legend(fontsize=8)
+    a2.set_title("Fragment speed at each output: the largest and the criterion's quantile", fontsize=10)
+    a2.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14))
     return save(fig, out_dir, "launch_speeds.png", written)
 
 

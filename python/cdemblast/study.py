@@ -475,6 +475,7 @@ def measure_variant(v, study, notes):
            "speed_quantile": qs, "rise_quantile": qr}
     speeds_all, speeds_q, rises_q = [], [], []
     last = None
+    ref_vol = None
     from .geometry import cell_node_lists
     for i in range(len(run.fields)):
         frs = load_frames(run, [i], 1.0, notes)
@@ -485,20 +486,25 @@ def measure_variant(v, study, notes):
         uz_all = vertical(f, run)
         rock_node = np.ones(uz_all.size, bool)
         rock_cell = np.ones(f.grid.ncells, bool)
-        if st is not None and st.measures is not None and st.charge_cell.size == f.grid.ncells:
+        charge = (st is not None and st.measures is not None
+                  and st.charge_cell.size == f.grid.ncells)
+        if charge:
             rock_cell = ~st.charge_cell  # the charge's own blocks are not fly-rock
-            for ids, nodes in cell_node_lists(f.grid):
+        # per rock block the rise of its nodes' mean (weighted by the block's reference volume,
+        # the same at every output)
+        cell_uz = np.full(f.grid.ncells, np.nan)
+        for ids, nodes in cell_node_lists(f.grid):
+            cell_uz[ids] = uz_all[nodes].mean(1)
+            if charge:
                 rock_node[nodes[st.charge_cell[ids]].ravel()] = False
+        if ref_vol is None or ref_vol.size != f.grid.ncells:
+            ref_vol = block_measures(f.X, f.grid)["volume"]
+        vol = ref_vol
         uz = uz_all[rock_node]
         if uz.size and (fly["max_vertical_displacement_m"] is None
                         or uz.max() > fly["max_vertical_displacement_m"]):
             fly["max_vertical_displacement_m"] = float(uz.max())
             fly["time_s"] = f.time
-        # the rise of each rock block: the mean of its nodes', weighted by its volume
-        cell_uz = np.full(f.grid.ncells, np.nan)
-        for ids, nodes in cell_node_lists(f.grid):
-            cell_uz[ids] = uz_all[nodes].mean(1)
-        vol = block_measures(f.X, f.grid)["volume"]
         r = weighted_quantile(cell_uz[rock_cell], vol[rock_cell], qr)
         if r is not None:
             rises_q.append((f.time, r))

@@ -226,6 +226,22 @@ int main(int argc, char** argv) {
                   "contact (with --warmup-broken 0.3: a fragmented blast state)");
   bench->add_flag("!--no-contact", bench_opt.contact, "General contact off (on by default, as in a case)");
   bench->add_flag("--json", bench_opt.json, "Print one JSON object");
+  std::string bench_law = "mohr_coulomb";
+  bench->add_option("--law", bench_law, "Interface law of the built-in model: mohr_coulomb or fracture_energy")
+      ->check(CLI::IsMember({"mohr_coulomb", "fracture_energy"}));
+  bench->add_option("--interfaces", bench_opt.interfaces,
+                    "Interface mode: tied (the default of a case) or springs (the paper's form)")
+      ->check(CLI::IsMember({"tied", "springs"}));
+  bench->add_option("--case", bench_opt.case_path,
+                    "Time this case instead of the built-in model (set-up timed by part, then the "
+                    "first --steps steps)");
+  bench->add_option("--set", bench_opt.sets, "With --case: override a case key")->allow_extra_args(false);
+  bench->add_option("--from", bench_opt.from_run,
+                    "With --case: start from the newest checkpoint of this run of the same case "
+                    "(time a late, fragmented state)");
+  bench->add_option("--warmup-steps", bench_opt.warmup_steps,
+                    "With --case: untimed steps before the timed ones (default 0)")
+      ->check(CLI::Range(static_cast<std::int64_t>(0), static_cast<std::int64_t>(100000000)));
 
   try {
     app.parse(argc, argv);
@@ -242,7 +258,22 @@ int main(int argc, char** argv) {
     if (*report) return cmd_report(report_runs, report_out);
     if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets, study_only,
                                    study_verbose, argv[0]);
-    if (*bench) return cdem::run_bench(bench_opt);
+    if (*bench) {
+      bench_opt.law = bench_law == "fracture_energy" ? cdem::InterfaceLaw::FractureEnergy
+                                                     : cdem::InterfaceLaw::MohrCoulomb;
+      const bool case_only = !bench_opt.sets.empty() || !bench_opt.from_run.empty() || bench_opt.warmup_steps > 0;
+      if (case_only && bench_opt.case_path.empty()) {
+        fmt::print(stderr, "error: bench: --set, --from and --warmup-steps go with --case FILE\n");
+        return 2;
+      }
+      if (!bench_opt.case_path.empty() && (bench->count("--law") || bench->count("--blocks") ||
+                                           bench->count("--warmup-broken"))) {
+        fmt::print(stderr, "error: bench: --law, --blocks and --warmup-broken are for the built-in "
+                           "model; with --case set its keys with --set\n");
+        return 2;
+      }
+      return cdem::run_bench(bench_opt);
+    }
     if (*resume) {
       case_path = (std::filesystem::path(resume_dir) / "case.resolved.toml").string();
       restart_dir = resume_dir;

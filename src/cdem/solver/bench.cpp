@@ -410,17 +410,31 @@ LoopResult best_loop(const PreparedCase& snapshot, int steps, int threads, int r
 int run_bench(const BenchOptions& opt) {
   const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();
   const int steps = std::max(1, opt.steps);
+  const bool own_case = !opt.case_path.empty();
+  // The model: the structured box (reproducible on every machine, no Gmsh), or the user's case.
   const double h = 0.05;
   const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, opt.blocks));
-  const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
-  Case c = bench::box_case(3, extent, h, InterfaceLaw::MohrCoulomb, 1);
-  c.contact.enabled = opt.contact || opt.fragmented;
+  Case c;
+  if (own_case) {
+    std::vector<std::string> sets = opt.sets;
+    if (!opt.interfaces.empty()) sets.push_back("simulation.interfaces=\"" + opt.interfaces + "\"");
+    c = load_case(opt.case_path, sets);
+    if (!opt.contact) c.contact.enabled = false;
+  } else {
+    const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
+    c = bench::box_case(3, extent, h, opt.law, 1);
+    c.contact.enabled = opt.contact || opt.fragmented;
+    if (opt.interfaces == "springs") c.interface_mode = InterfaceMode::Springs;
+  }
 
   const double load0 = load_average();
-  const double setup0 = omp_get_wtime();
   omp_set_num_threads(threads);
-  const Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], h);
-  PreparedCase pc = prepare_case(c, mesh);  // as `cdemblast run` sets a case up
+  double setup0 = omp_get_wtime();
+  const Mesh mesh = own_case ? load_mesh(c) : bench::structured_tet_box(cells[0], cells[1], cells[2], h);
+  const double mesh_s = omp_get_wtime() - setup0;
+  omp_set_num_threads(threads);  // (meshing may have changed it)
+  SetupTimes parts;
+  PreparedCase pc = prepare_case(c, mesh, &parts);  // as `cdemblast run` sets a case up
   add_charge_loads(pc);
   Simulation& sim = pc.sim;
   const BarCharges& bars = pc.bars;
@@ -431,17 +445,23 @@ int run_bench(const BenchOptions& opt) {
   const auto nsp = static_cast<double>(m0.n_springs());
   const std::size_t mem = bench::model_bytes(m0);
 
-  // Warm-up: step until cracking is under way (--warmup-broken, default 0.5 % of the spring
-  // points broken), at most 20 x steps + 2000 steps (x 10 beyond the default fraction).
-  const std::int64_t want_broken =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(opt.warmup_broken * nsp));
-  const std::int64_t max_warm = (20LL * steps + 2000) * (opt.warmup_broken > 0.005 ? 10 : 1);
+  // Warm-up. The box: step until cracking is under way (--warmup-broken, default 0.5 % of the
+  // spring points broken), at most 20 x steps + 2000 steps (x 10 beyond the default fraction).
+  // A case: --warmup-steps steps, after the state of a run's checkpoint (--from) if given.
   const double warm0 = omp_get_wtime();
   std::int64_t warm_steps = 0, broken0 = 0, released = 0;
-  while (warm_steps < max_warm) {
-    sim.step();
-    ++warm_steps;
-    if (warm_steps % 10 == 0 && (broken0 = broken_springs(sim.model())) >= want_broken) break;
+  if (own_case) {
+    if (!opt.from_run.empty()) load_checkpointed_state(pc, c, opt.from_run);
+    for (; warm_steps < opt.warmup_steps; ++warm_steps) sim.step();
+  } else {
+    const std::int64_t want_broken =
+        std::max<std::int64_t>(1, static_cast<std::int64_t>(opt.warmup_broken * nsp));
+    const std::int64_t max_warm = (20LL * steps + 2000) * (opt.warmup_broken > 0.005 ? 10 : 1);
+    while (warm_steps < max_warm) {
+      sim.step();
+      ++warm_steps;
+      if (warm_steps % 10 == 0 && (broken0 = broken_springs(sim.model())) >= want_broken) break;
+    }
   }
   if (opt.fragmented) {
     released = release_broken(sim.model());
@@ -510,28 +530,43 @@ int run_bench(const BenchOptions& opt) {
             "\"cpu_ns_per_block_step_1_thread\": {:.4g}, "
             "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
             "\"load_average\": [{:.2f}, {:.2f}], \"contact\": {}, \"released\": {}, "
-            "\"contact_pairs\": {}, \"contact_active_max\": {}, \"kernels\": {{{}}}}}",
+            "\"contact_pairs\": {}, \"contact_active_max\": {}, \"interface_mode\": \"{}\", "
+            "\"setup_s\": {{\"total\": {:.4g}, \"mesh\": {:.4g}, \"topology\": {:.4g}, "
+            "\"charges\": {:.4g}, \"simulation\": {:.4g}}}, \"kernels\": {{{}}}}}",
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
             warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
             r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup,
             static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
             cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
-            rm.pairs, rm.active_max, kernels)
+            rm.pairs, rm.active_max, m0.tied ? "tied" : "springs", setup_s, mesh_s, parts.topology,
+            parts.charges, parts.simulation, kernels)
             .c_str());
     return 0;
   }
 
   std::string out;
-  out += fmt::format(
-      "cdemblast bench: {} tetrahedra ({} x {} x {} cubes of {} m, 6 tets each), {} nodes, {} "
-      "interfaces, {} spring points\n",
-      m0.n_blocks(), cells[0], cells[1], cells[2], h, m0.n_nodes(), m0.n_ifaces(), m0.n_springs());
-  out += fmt::format(
-      "  granite E 99.3 GPa, brittle Mohr-Coulomb interfaces (f_t 8.11 MPa, c 20 MPa, phi 35 deg); "
-      "one emulsion bar (40 mm, {} segments, {} loaded blocks); bottom fixed, sides "
-      "non-reflecting\n",
-      bars.n_segments(), bars.elem_block.size());
+  const char* mode = m0.tied ? "tied" : "springs";
+  if (own_case) {
+    out += fmt::format("cdemblast bench --case {}: {} blocks ({}D), {} nodes, {} interfaces, {} spring points\n",
+                       opt.case_path, m0.n_blocks(), m0.dim, m0.n_nodes(), m0.n_ifaces(), m0.n_springs());
+    std::string laws;
+    for (const auto& im : m0.iface_materials) laws += fmt::format("{}{}", laws.empty() ? "" : ", ", name_of(im.law));
+    out += fmt::format("  {} interfaces ({}); {} bar segments, {} loaded blocks; {} explosive blocks\n", mode,
+                       laws, bars.n_segments(), bars.elem_block.size(), pc.solids.block.size());
+    if (!opt.from_run.empty())
+      out += fmt::format("  state: the newest checkpoint of '{}' (t = {:.4g} s, step {})\n", opt.from_run,
+                         sim.time(), sim.steps() - warm_steps);
+  } else {
+    out += fmt::format(
+        "cdemblast bench: {} tetrahedra ({} x {} x {} cubes of {} m, 6 tets each), {} nodes, {} "
+        "interfaces, {} spring points\n",
+        m0.n_blocks(), cells[0], cells[1], cells[2], h, m0.n_nodes(), m0.n_ifaces(), m0.n_springs());
+    out += fmt::format(
+        "  granite E 99.3 GPa, {} {} interfaces (f_t 8.11 MPa, c 20 MPa, phi 35 deg); one emulsion "
+        "bar (40 mm, {} segments, {} loaded blocks); bottom fixed, sides non-reflecting\n",
+        mode, name_of(opt.law), bars.n_segments(), bars.elem_block.size());
+  }
   if (opt.fragmented)
     out += fmt::format(
         "  fragmented: the {} points broken in the warm-up are released (the blocks between the "
@@ -544,12 +579,16 @@ int run_bench(const BenchOptions& opt) {
         rm.pairs, rm.active_max, rm.rebuilds);
   else
     out += "  general contact off (--no-contact)\n";
-  out += fmt::format("  set-up {:.2f} s; dt = {:.4g} s ({})\n", setup_s, dt, sim.stable().limit);
+  out += fmt::format(
+      "  set-up {:.2f} s: mesh {:.2f} s, topology {:.2f} s, charges {:.2f} s, simulation {:.2f} s; "
+      "dt = {:.4g} s ({})\n",
+      setup_s, mesh_s, parts.topology, parts.charges, parts.simulation, dt, sim.stable().limit);
   out += fmt::format(
       "  warm-up: {} steps in {:.2f} s to t = {:.4g} s: {} spring points broken ({:.2f} %)\n",
       warm_steps, warm_s, t0, broken0, 100.0 * static_cast<double>(broken0) / nsp);
-  out += fmt::format(
-      "  mean Newton iterations of the tet polar decomposition at that state: {:.2f}\n", polar_it);
+  if (m0.dim == 3)
+    out += fmt::format(
+        "  mean Newton iterations of the tet polar decomposition at that state: {:.2f}\n", polar_it);
   out += fmt::format(
       "  timed: {} steps per run, best of {} runs from the same state; {} broken "
       "at the end ({:.2f} %)\n\n",
@@ -560,7 +599,7 @@ int run_bench(const BenchOptions& opt) {
   out += fmt::format("throughput ({} thread{}):\n", threads, threads == 1 ? "" : "s");
   out += fmt::format("  block-steps/s          {:.4g}\n", block_rate);
   out += fmt::format("  spring-point-steps/s   {:.4g}\n", spring_rate);
-  out += fmt::format("  ns per block-step      {:.1f}   (target 40 on 2 threads)\n", ns_block);
+  out += fmt::format("  ns per block-step      {:.1f}{}\n", ns_block, own_case ? "" : "   (target 40 on 2 threads)");
   out += "\n";
   double ksum1 = 0;
   for (double k : r1.k) ksum1 += k;

@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cdem/io/case.hpp"
 #include "cdem/mesh/mesh.hpp"
@@ -35,6 +36,16 @@ struct BenchOptions {
   bool fragmented = false;       // after the warm-up the broken points are released: the
                                  // blocks between the cracks are fragments touching through
                                  // contact (with warmup_broken: how fragmented)
+  InterfaceLaw law = InterfaceLaw::MohrCoulomb;  // the box's interface law (--law)
+  std::string interfaces;        // "tied" | "springs" (--interfaces); "": tied for the box, the
+                                 // case's own for --case
+  // --case FILE: time that case (its --set overrides applied) instead of the box: set-up timed
+  // by part, then `warmup_steps` untimed steps (or the state of a run's newest checkpoint,
+  // --from DIR, the same case: a late, fragmented state), then the timed steps
+  std::string case_path;
+  std::vector<std::string> sets;
+  std::string from_run;
+  std::int64_t warmup_steps = 0;
 };
 
 // Runs the benchmark and prints its report on stdout. Returns 0.

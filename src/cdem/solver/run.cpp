@@ -184,16 +184,25 @@ void add_region_and_uplift_summary(std::vector<std::pair<std::string, std::strin
 }
 }  // namespace
 
-PreparedCase prepare_case(const Case& c, const Mesh& mesh) {
+PreparedCase prepare_case(const Case& c, const Mesh& mesh, SetupTimes* times) {
   check_case_against_mesh(c, mesh);
+  using SetupClock = std::chrono::steady_clock;
+  auto lap = [times, t = SetupClock::now()](double SetupTimes::*part) mutable {
+    const auto now = SetupClock::now();
+    if (times) times->*part += std::chrono::duration<double>(now - t).count();
+    t = now;
+  };
   // Bars are bound before the simulation is set up: the blocks holding a charge change
   // material (time step, masses).
   Model model = build_case_model(c, mesh);
+  lap(&SetupTimes::topology);
   BarCharges bars = build_bar_charges(model, c);
   const double bar_dt = make_charge_cavities(model, bars);
   SolidCharges solids = build_solid_charges(model, c);
+  lap(&SetupTimes::charges);
   diagnose_time_step(model, c);
   Simulation sim(std::move(model), c);
+  lap(&SetupTimes::simulation);
   if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
   if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
   const std::string dt_source =
@@ -250,13 +259,14 @@ std::string first_difference(const std::string& a, const std::string& b) {
 
 // The newest checkpoint of `dir` that reads and checks out; a refused one is reported and the
 // one before it is tried.
-StateArchive load_last_checkpoint(const std::string& dir, bool quiet) {
+StateArchive load_last_checkpoint(const std::string& dir, bool quiet,
+                                  const char* option = "--restart") {
   const auto files = list_checkpoints(dir);
   if (files.empty())
-    throw InputError(fmt::format("--restart {}: no checkpoint in '{}' (a run writes one every "
+    throw InputError(fmt::format("{} {}: no checkpoint in '{}' (a run writes one every "
                                  "simulation.checkpoint_wall_interval, at its end and when "
                                  "interrupted)",
-                                 dir, checkpoint_dir(dir)));
+                                 option, dir, checkpoint_dir(dir)));
   std::string why;
   for (const auto& f : files) {
     try {
@@ -268,10 +278,31 @@ StateArchive load_last_checkpoint(const std::string& dir, bool quiet) {
       why += fmt::format("\n  {}", e.what());
     }
   }
-  throw InputError(fmt::format("--restart {}: no readable checkpoint:{}", dir, why));
+  throw InputError(fmt::format("{} {}: no readable checkpoint:{}", option, dir, why));
+}
+
+// The checkpoint's case against this one: only the schedule keys may differ.
+void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string& dir,
+                           const std::string& signature) {
+  std::string sig;
+  ckpt.io("run.case_signature", sig);
+  if (sig != signature)
+    throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
+                                 "at {}; only simulation.end_time, output_interval, output_times, "
+                                 "history_interval, threads, max_steps and the checkpoint keys may "
+                                 "change for a restart",
+                                 c.path, dir, first_difference(sig, signature)));
 }
 
 }  // namespace
+
+void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string& dir) {
+  StateArchive ar = load_last_checkpoint(dir, true, "--from");
+  check_checkpoint_case(ar, c, dir, restart_signature(c));
+  pc.sim.io_state(ar);
+  io_state(ar, pc.bars);
+  io_state(ar, pc.solids);
+}
 
 RunResult run_case(const Case& c, const RunOptions& opt) {
   const auto wall0 = Clock::now();
@@ -285,14 +316,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   std::optional<StateArchive> ckpt;
   if (opt.restart) {
     ckpt.emplace(load_last_checkpoint(opt.out_dir, opt.quiet));
-    std::string sig;
-    ckpt->io("run.case_signature", sig);
-    if (sig != signature)
-      throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
-                                   "at {}; only simulation.end_time, output_interval, output_times, "
-                                   "history_interval, threads, max_steps and the checkpoint keys may "
-                                   "change for a restart",
-                                   c.path, opt.out_dir, first_difference(sig, signature)));
+    check_checkpoint_case(*ckpt, c, opt.out_dir, signature);
   } else {
     prepare_run_dir(opt.out_dir, opt.overwrite);
   }

@@ -52,8 +52,19 @@ struct PreparedCase {
   SolidCharges solids;
   RunSize size;  // steps, field outputs, history samples
 };
-PreparedCase prepare_case(const Case& c, const Mesh& mesh);
+// Wall time of the parts of set-up (s): the CDEM topology (split nodes, interfaces, spring
+// points), binding the charges (bars: segments and the blocks they cross; solid charges), the
+// simulation (ties, stable time step, contact set-up).
+struct SetupTimes {
+  double topology = 0, charges = 0, simulation = 0;
+};
+PreparedCase prepare_case(const Case& c, const Mesh& mesh, SetupTimes* times = nullptr);
 void add_charge_loads(PreparedCase& pc);
+
+// Loads the stepped state (simulation, charges) of the newest readable checkpoint of the run in
+// `dir` into pc, which was prepared from the same case (checked as a restart checks it: only the
+// schedule keys may differ). For `cdemblast bench --case ... --from DIR`: time a late state.
+void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string& dir);
 
 // Runs the case into opt.out_dir (locked for the run; docs/checkpoint.md), writing checkpoints
 // on the case's schedule, at the end and when interrupted by SIGINT / SIGTERM.

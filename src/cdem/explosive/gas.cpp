@@ -92,14 +92,29 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
     return true;
   };
+  // 0. cracks: which listed interfaces are open and their apertures (the gathers of positions
+  // are most of this function's cost): in parallel, each interface on its own, so the serial
+  // passes below see the same values for any thread count
+  if (cracks) {
+    g.list_open.resize(nlist);  // (grows with the list of opened interfaces only)
+    g.list_aperture.resize(nlist);
+    const auto nl = static_cast<std::int64_t>(nlist);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < nl; ++k) {
+      const std::size_t i = iface_at(static_cast<std::size_t>(k));
+      const bool o = open(i);
+      g.list_open[k] = o;
+      g.list_aperture[k] = o ? aperture(i) : 0.0;
+    }
+  }
   // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed)
   if (cracks) {
     for (std::size_t k = 0; k < nlist; ++k) {
+      if (!g.list_open[k]) continue;
       const std::size_t i = iface_at(k);
-      if (!open(i)) continue;
       const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
       std::int32_t d = g.iface_body[i];
-      const double w = aperture(i);
+      const double w = g.list_aperture[k];
       if (d < 0) {
         const std::int32_t da = g.block_body[ba], db = g.block_body[bb];
         d = da >= 0 ? da : db;
@@ -168,8 +183,8 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       const std::size_t i = iface_at(k);
       const std::int32_t d = g.iface_body[i];
       g.iface_gas_p[i] = 0.0f;
-      if (d < 0 || g.bodies[d].model != GasModel::Cracks || !open(i)) continue;
-      if (!(aperture(i) > 0)) continue;
+      if (d < 0 || g.bodies[d].model != GasModel::Cracks || !g.list_open[k]) continue;
+      if (!(g.list_aperture[k] > 0)) continue;
       const double p = g.iface_fill[i] * g.bodies[d].pressure;
       if (!(p > 0)) continue;
       g.iface_gas_p[i] = static_cast<float>(p);

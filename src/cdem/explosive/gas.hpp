@@ -78,6 +78,10 @@ struct GasField {
   std::vector<std::int32_t> iface_body, block_body;
   std::vector<std::uint8_t> block_exterior;
   std::vector<double> scratch;
+  // this step, per interface of the crack list (update_gas): open (every point untied / broken)
+  // and its mean aperture (m); computed in parallel before the serial passes that use them
+  std::vector<std::uint8_t> list_open;
+  std::vector<double> list_aperture;
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;

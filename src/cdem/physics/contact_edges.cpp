@@ -87,11 +87,27 @@ void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
 // do not overlap and no edge of either is inside the other. (Touching blocks, within tol of a
 // common plane, are not separated: their coplanar edge crossings hold aligned blocks whose
 // vertex contacts alone let a corner node slip in; see docs/verification_contact.md.)
-bool separated(const TetGeom& G, const TetGeom& S) {
+// Otherwise `edges` gets the edges of S that may have a point inside G: an edge both of whose
+// ends are in front of one face plane of G by more than 2 tol has none (every point of it is in
+// front of that plane by more than 2 tol, less rounding, so `inside` rejects it and no edge pair
+// with it can hit: skipping it changes no result).
+bool separated(const TetGeom& G, const TetGeom& S, int& edges) {
+  int front2 = 0;  // bit 4 k + i: node i of S in front of face k of G by more than 2 tol
   for (int k = 0; k < 4; ++k) {
     bool all = true;
-    for (int i = 0; i < 4 && all; ++i) all = dot(S.x[i] - G.a0[k], G.n[k]) > G.tol;
+    for (int i = 0; i < 4; ++i) {
+      const double g = dot(S.x[i] - G.a0[k], G.n[k]);
+      all = all && g > G.tol;
+      if (g > 2 * G.tol) front2 |= 1 << (4 * k + i);
+    }
     if (all) return true;
+  }
+  edges = 0;
+  for (int e = 0; e < 6; ++e) {
+    const int both = (1 << kTetEdges[e][0]) | (1 << kTetEdges[e][1]);
+    bool out = false;
+    for (int k = 0; k < 4 && !out; ++k) out = ((front2 >> (4 * k)) & both) == both;
+    if (!out) edges |= 1 << e;
   }
   return false;
 }
@@ -287,15 +303,18 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     }
     const TetGeom& A = cs.eb_geom[ia];
     const TetGeom& B = cs.eb_geom[ib];
-    near = near && (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B) && !separated(B, A);
+    int a_in = 0, b_in = 0;  // the edges of A that may reach into B, of B into A
+    near = near && (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in) &&
+           !separated(B, A, a_in);
     if (!near && plo == phi) {  // (most of the rest: blocks side by side across a crack)
       cs.bp_count[j + 1] = 0;
       continue;
     }
+    const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
     std::int32_t count = 0;
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {
-        const bool cand = (A.cand_edges >> ea & 1) && (B.cand_edges >> eb & 1);
+        const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
         EdgeHit h;
         bool hit = near && cand && edge_hit(A, ea, B, eb, h);
         // a is the block whose edge is pushed along +n: try both roles (the edge pair in
@@ -319,12 +338,14 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     const TetGeom& B = cs.eb_geom[cs.bp_ib[j]];
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
     auto o = static_cast<std::size_t>(cs.bp_count[j]);
+    int a_in = 0, b_in = 0;
     const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r) &&
-                      (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B) &&
-                      !separated(B, A);
+                      (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in) &&
+                      !separated(B, A, a_in);
+    const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {
-        const bool cand = (A.cand_edges >> ea & 1) && (B.cand_edges >> eb & 1);
+        const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
         EdgeHit h;
         bool a_pushed = true;  // the edge pushed along +n is a's (else b's)
         bool hit = near && cand && edge_hit(A, ea, B, eb, h);

@@ -277,8 +277,14 @@ constexpr int kChunk = 32;
 //     fracture-energy law);
 //  3. the flagged ones, one at a time, through the full update.
 // The law of each interface is read per lane.
-template <int NP, bool kG0>
-int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe) {
+// kList (tied mode): the chunk is entries i0 .. i0 + w - 1 of `list` (the active interfaces), not
+// interfaces i0 .. i0 + w - 1, and tied points are skipped (no force, no update: as
+// spring_interface<true>); the spring points' state is copied into contiguous arrays of the
+// chunk for the spring loop (GCC 12 does not vectorise it with indexed loads and stores) and
+// copied back after it.
+template <int NP, bool kG0, bool kList = false>
+int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
+                 const std::int32_t* list = nullptr) {
   // Per interface (index l) the previous normal; per spring point of the chunk (index k = l NP + q,
   // the interface's values repeated NP times, so that the spring loop reads them contiguously)
   // the normal, the spin, the constants and the law's parameters.
@@ -291,6 +297,8 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
   alignas(64) double fsx0[K], fsy0[K], fsz0[K];
   alignas(64) double dx[K], dy[K], dz[K], dvx[K], dvy[K], dvz[K];  // x_b - x_a, v_b - v_a
   alignas(64) double onx[K], ony[K], onz[K], rel_l[K], tphir_l[K];  // for broken spring points
+  alignas(64) std::int64_t sidx[kList ? K : 1];  // kList: the spring point of each k
+  alignas(64) int skip[kList ? K : 1];           // kList: a tied point
   // Component loads and stores (an aggregate Vec3 copy is not vectorised by GCC 12).
   const double* x = reinterpret_cast<const double*>(m.x.data());
   const double* v = reinterpret_cast<const double*>(m.v.data());
@@ -301,7 +309,12 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
   double* normal = reinterpret_cast<double*>(m.iface_normal.data());
 #pragma omp simd
   for (int l = 0; l < w; ++l) {
-    const std::int64_t i = i0 + l, s0 = i * NP;
+    const std::int64_t i = kList ? list[i0 + l] : i0 + l, s0 = i * NP;
+    if constexpr (kList)
+      for (int q = 0; q < NP; ++q) {
+        sidx[l * NP + q] = s0 + q;
+        skip[l * NP + q] = m.sp_tied[s0 + q] != 0;
+      }
     // The face nodes' positions and velocities (the only gathers of the kernel): d = x_b - x_a
     // and dv = v_b - v_a per spring point, kept for the spring loop.
     double pax[NP], pay[NP], paz[NP], pbx[NP], pby[NP], pbz[NP];
@@ -369,7 +382,28 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
   double* diss_io = m.sp_dissipated.data();
   double* fs_io = reinterpret_cast<double*>(m.sp_fs.data());
   const std::uint8_t* state_in = m.sp_state.data();
-  const std::int64_t s_begin = i0 * NP;
+  std::int64_t s_begin = i0 * NP;
+  constexpr int KL = kList ? K : 1;  // the chunk's copies (kList)
+  alignas(64) double g0_c[KL], fn_c[KL], diss_c[KL], fs_c[3 * KL];
+  alignas(64) std::uint8_t state_c[KL];
+  if constexpr (kList) {
+    for (int k = 0; k < w * NP; ++k) {
+      const std::int64_t s = sidx[k];
+      if constexpr (kG0) g0_c[k] = m.sp_g0[s];
+      fn_c[k] = fn_out[s];
+      diss_c[k] = diss_io[s];
+      fs_c[3 * k] = fs_io[3 * s];
+      fs_c[3 * k + 1] = fs_io[3 * s + 1];
+      fs_c[3 * k + 2] = fs_io[3 * s + 2];
+      state_c[k] = state_in[s];
+    }
+    g0 = g0_c;
+    fn_out = fn_c;
+    diss_io = diss_c;
+    fs_io = fs_c;
+    state_in = state_c;
+    s_begin = 0;
+  }
   // The spring loop, with or without the broken-contact path: its square roots and divisions
   // cost about as much as the rest, so chunks without a broken spring point (most: cracks are
   // local) skip it.
@@ -379,6 +413,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
   for (int k = 0; k < w * NP; ++k) {
     const std::int64_t s = s_begin + k;
     const int state = state_in[s];
+    const bool tied = kList ? skip[k] != 0 : false;
     const double n_x = nx[k], n_y = ny[k], n_z = nz[k];
     const double dn = dx[k] * n_x + dy[k] * n_y + dz[k] * n_z;
     // du = dt (v_b - v_a) - (d . n) e
@@ -414,7 +449,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
         (kind == static_cast<int>(InterfaceLaw::Elastic)) |
         ((fn < ft_l[k] * area_l[k]) & (tau > 0) & (fx * fx + fy * fy + fz * fz < tau * tau));
     const bool fast = (state == kIntact) &
-                      (kind != static_cast<int>(InterfaceLaw::FractureEnergy)) & holds;
+                      (kind != static_cast<int>(InterfaceLaw::FractureEnergy)) & holds & !tied;
     bool broken = false;
     double fnb = 0, bsc = 1, diss = 0;
     if constexpr (kBroken) {
@@ -431,7 +466,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
       bsc = mag > cap ? capf : 1.0;
       const double bx = fx * bsc, by = fy * bsc, bz = fz * bsc;
       broken = (state == kBroken) &
-                          !(std::sqrt(dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k]) > rel_l[k]);
+               !(std::sqrt(dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k]) > rel_l[k]) & !tied;
       const double fn_old = fn_out[s];
       const double e_old = 0.5 * fn_old * fn_old / kn + 0.5 * fs_old2 / ks;
       const double fox = fn_old * onx[k] + fx0, foy = fn_old * ony[k] + fy0,
@@ -458,7 +493,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
     fsz0[k] = fz0;
     const bool done = fast | broken;
     keep[k] = !done;
-    slow[k] = (!done) & (state != kReleased);
+    slow[k] = (!done) & (state != kReleased) & !tied;
   }
   };
   bool any_broken = false;
@@ -467,25 +502,52 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe)
     spring_loop(std::true_type{});
   else
     spring_loop(std::false_type{});
+  if constexpr (kList)  // the chunk's copies back (unchanged values where nothing was written)
+    for (int k = 0; k < w * NP; ++k) {
+      const std::int64_t s = sidx[k];
+      m.sp_fn[s] = fn_c[k];
+      m.sp_dissipated[s] = diss_c[k];
+      m.sp_fs[s] = Vec3{fs_c[3 * k], fs_c[3 * k + 1], fs_c[3 * k + 2]};
+    }
   // (Counted here: a simd reduction in the loop above made GCC 12 leave that loop scalar.)
   int n_keep = 0;  // spring points neither vector path takes
   for (int k = 0; k < w * NP; ++k) n_keep += keep[k];
   if (n_keep == 0) return 0;
   for (int k = 0; k < w * NP; ++k)
-    if (keep[k]) m.sp_fs[s_begin + k] = Vec3{fsx0[k], fsy0[k], fsz0[k]};
+    if (keep[k]) m.sp_fs[kList ? sidx[k] : s_begin + k] = Vec3{fsx0[k], fsy0[k], fsz0[k]};
   int released = 0;
   for (int k = 0; k < w * NP; ++k) {
     if (!slow[k]) continue;
     const int l = k / NP;
-    const std::int64_t s = s_begin + k;
+    const std::int64_t s = kList ? sidx[k] : s_begin + k;
     const Vec3 n{nx[k], ny[k], nz[k]}, e{ex[k], ey[k], ez[k]}, n_old{ox[l], oy[l], oz[l]};
     const Vec3 d{dx[k], dy[k], dz[k]};
     const Vec3 du = dt * Vec3{dvx[k], dvy[k], dvz[k]} - dot(d, n) * e;
-    const double off = kG0 ? g0[s] : 0.0;
-    const std::int64_t i = i0 + l;
+    const double off = kG0 ? m.sp_g0[s] : 0.0;
+    const std::int64_t i = kList ? list[i0 + l] : i0 + l;
     released += spring_full_update(m, laws[mat[i]], i, s, d, du, n, n_old, off, t, fe);
   }
   return released;
+}
+
+// Tied mode: the active interfaces (those with an untied point; their normals kept from
+// activation on) in chunks of the list, tied points skipped: the same arithmetic as
+// spring_forces_tied.
+template <int NP, bool kG0>
+void spring_forces_tied_chunked(Model& m, double dt, double t) {
+  const auto na = static_cast<std::int64_t>(m.active_ifaces.size());
+  const std::int64_t nc = (na + kChunk - 1) / kChunk;
+  const bool fe = !m.sp_w.empty();
+  const std::int32_t* list = m.active_ifaces.data();
+  std::int64_t released = 0;
+#pragma omp parallel for schedule(static) reduction(+ : released)
+  for (std::int64_t c = 0; c < nc; ++c) {
+    const std::int64_t k0 = c * kChunk;
+    released += spring_chunk<NP, kG0, true>(m, k0, static_cast<int>(std::min<std::int64_t>(kChunk, na - k0)),
+                                            dt, t, fe, list);
+  }
+  m.released_points += released;
+  m.iface_normal_set = true;
 }
 
 template <int NP, bool kG0>
@@ -509,11 +571,16 @@ void spring_forces(Model& m, double dt, double t) {
     m.iface_normal.assign(m.n_ifaces(), Vec3{});
     m.iface_normal_set = false;
   }
+  const bool g0 = !m.sp_g0.empty();
   if (m.tied) {
-    spring_forces_tied(m, dt, t);
+    if (m.springs_per_iface == 3)
+      g0 ? spring_forces_tied_chunked<3, true>(m, dt, t) : spring_forces_tied_chunked<3, false>(m, dt, t);
+    else if (m.springs_per_iface == 2)
+      g0 ? spring_forces_tied_chunked<2, true>(m, dt, t) : spring_forces_tied_chunked<2, false>(m, dt, t);
+    else
+      spring_forces_tied(m, dt, t);
     return;
   }
-  const bool g0 = !m.sp_g0.empty();
   if (!m.iface_normal_set || (m.springs_per_iface != 2 && m.springs_per_iface != 3)) {
     spring_forces_generic(m, dt, t);
   } else if (m.springs_per_iface == 3) {
@@ -528,7 +595,10 @@ void spring_forces_reference(Model& m, double dt, double t) {
     m.iface_normal.assign(m.n_ifaces(), Vec3{});
     m.iface_normal_set = false;
   }
-  spring_forces_generic(m, dt, t);
+  if (m.tied)
+    spring_forces_tied(m, dt, t);
+  else
+    spring_forces_generic(m, dt, t);
 }
 
 void gather_spring_forces(Model& m) {

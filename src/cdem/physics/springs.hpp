@@ -52,11 +52,12 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
 
 // All spring points: sp_fn, sp_fs (the force on node a is spring_force). Parallel over
 // interfaces; vectorised over chunks of interfaces (springs.cpp) once the previous normals are
-// kept, with the same arithmetic as spring_forces_reference.
+// kept, with the same arithmetic as spring_forces_reference. Tied mode (Model::tied): the active
+// interfaces only, in chunks of that list, tied points skipped.
 void spring_forces(Model& m, double dt, double t);
 
 // The same one interface and one spring point at a time (the reference form the vectorised
-// kernel reproduces bit for bit; test_spring_kernel.cpp).
+// kernel reproduces bit for bit, in both modes; test_spring_kernel.cpp).
 void spring_forces_reference(Model& m, double dt, double t);
 
 // The force of spring point s on its node a (node b gets minus it): F_n n + F_s, with n the

@@ -172,6 +172,10 @@ int main(int argc, char** argv) {
                   "Continue the run in this directory from its last good checkpoint (the case may "
                   "change only in end_time, the output and checkpoint schedule, threads)");
   run->add_flag("--overwrite", overwrite, "Remove the results of an earlier run in --out first");
+  bool fixed_threads = false;
+  run->add_flag("--fixed-threads", fixed_threads,
+                "Keep the thread count (by default a run drops to the cores it actually gets when "
+                "other work shares the machine, and climbs back: results do not depend on it)");
 
   std::string resume_dir;
   std::vector<std::string> resume_sets;
@@ -183,6 +187,7 @@ int main(int argc, char** argv) {
   resume->add_option("--set", resume_sets, "Change a key that may change: --set simulation.end_time=0.1")
       ->allow_extra_args(false);
   resume->add_flag("--quiet,-q", quiet, "No progress output");
+  resume->add_flag("--fixed-threads", fixed_threads, "Keep the thread count (see run --fixed-threads)");
 
   auto* check = app.add_subcommand("check", "Validate a case, mesh it, print the model size and dt");
   check->add_option("case", case_path, "Case file (TOML)")->required();
@@ -299,6 +304,7 @@ int main(int argc, char** argv) {
     opt.quiet = quiet;
     opt.restart = !restart_dir.empty();
     opt.overwrite = overwrite;
+    opt.adapt_threads = !fixed_threads;
     const auto res = cdem::run_case(c, opt);
     return res.status;
   } catch (const cdem::InputError& e) {

@@ -85,7 +85,8 @@ tmp, ref = sys.argv[1], json.load(open(sys.argv[2]))
 PEAK_REL, TIME_ABS, FD_ABS, WORK_REL = 0.02, 5e-6, 0.02, 0.02
 ERR_FACTOR, ERR_ABS = 1.2, 1e-3
 # per run: its timings, the thread count and its run id (a new one for every run)
-TIMING = {"wall_time_s", "loop_time_s", "threads", "block_steps_per_s", "spring_steps_per_s", "kernel_time_s",
+TIMING = {"wall_time_s", "loop_time_s", "threads", "threads_adaptive", "threads_final", "threads_switches",
+          "threads_step_seconds", "block_steps_per_s", "spring_steps_per_s", "kernel_time_s",
           "run_id", "checkpoint_write_time_s", "checkpoint_bytes", "checkpoints_written"}
 bad = 0
 

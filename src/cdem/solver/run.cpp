@@ -29,6 +29,7 @@
 #include "cdem/solver/run_dir.hpp"
 #include "cdem/solver/run_state.hpp"
 #include "cdem/solver/simulation.hpp"
+#include "cdem/solver/thread_governor.hpp"
 #include "cdem/solver/time_step.hpp"
 
 namespace cdem {
@@ -454,11 +455,17 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     ~SignalGuard() { restore_default_signals(); }
   } signal_guard;
   const std::int64_t k0 = sim.steps();
+  // The thread count follows the cores the run gets (thread_governor.hpp): results do not depend
+  // on it.
+  ThreadGovernor governor(threads, opt.adapt_threads);
   for (std::int64_t k = k0; k < steps_limit; ++k) {
     const double t_state = sim.time();  // the state after this step is at t_n = this time
     const bool hist = t_state >= next_hist - 0.5 * dt || k + 1 == steps_limit;
     if (hist) reactions.before_step(m);
+    const auto step0 = Clock::now();
     sim.step(hist);
+    if (const std::string msg = governor.after_step(elapsed(step0)); !msg.empty() && !opt.quiet)
+      spdlog::info("{}", msg);
     uplift.update(m);
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
     if (hist) {
@@ -544,6 +551,15 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"wall_time_s", json_number(res.wall_time_s)},
       {"loop_time_s", json_number(loop_s)},
       {"threads", std::to_string(threads)},
+      {"threads_adaptive", opt.adapt_threads && threads > 1 ? "true" : "false"},
+      {"threads_final", std::to_string(governor.threads())},
+      {"threads_switches", std::to_string(governor.switches())},
+      {"threads_step_seconds", [&] {
+         std::string a = "[";
+         for (std::size_t i = 0; i < governor.seconds_at().size(); ++i)
+           a += (i ? ", " : "") + json_number(governor.seconds_at()[i]);
+         return a + "]";
+       }()},
       {"steps", std::to_string(res.steps)},
       {"dt", json_number(dt)},
       {"dt_limit", json_string(st.limit)},

@@ -19,6 +19,7 @@ struct RunOptions {
   bool quiet = false;    // no progress output
   bool restart = false;  // continue the run in out_dir from its last good checkpoint
   bool overwrite = false;  // remove the results of an earlier run in out_dir first
+  bool adapt_threads = true;  // follow the cores the run gets (thread_governor.hpp)
 };
 
 struct RunResult {

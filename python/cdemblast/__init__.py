@@ -14,6 +14,7 @@ Modules (see docs/report.md and docs/study.md):
     study       studies: variants of a base case, run and compared (`cdemblast study`)
     analyses    study analyses of the shipped examples (SPEC 5.1, 5.2)
     overlap     nodes inside a block of another fragment (contact checks; needs scipy)
+    perf        the cost-growth curve from `cdemblast bench --json` reports
 
 The thin commands (scripts/cdem_report.py, scripts/cdem_study.py, examples/*/compare,
 examples/multihole_3d/speedup) put this directory's parent on sys.path and import it; no

@@ -877,4 +877,20 @@ double contact_dissipated(const ContactSet& cs) {
   return d;
 }
 
+std::size_t contact_bytes(const ContactSet& cs) {
+  auto b = [](const auto&... v) { return ((v.capacity() * sizeof(v[0])) + ... + std::size_t{0}); };
+  return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.pair_node,
+           cs.pair_block, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
+           cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
+           cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
+           cs.near, cs.near_group, cs.pair_near, cs.pair_off, cs.pair_wake, cs.node_drift,
+           cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
+           cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand) +
+         b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.eb_block, cs.bp_ia, cs.bp_ib,
+           cs.eb_c, cs.eb_r, cs.eb_need, cs.eb_geom, cs.ec_a, cs.ec_b, cs.ec_key, cs.ec_d0, cs.ec_gap,
+           cs.ec_k, cs.ec_diss, cs.ec_s, cs.ec_t, cs.ec_force, cs.ec_ft, cs.ecn_a, cs.ecn_b, cs.ecn_key,
+           cs.ecn_d0, cs.ecn_gap, cs.ecn_k, cs.ecn_diss, cs.ecn_s, cs.ecn_t, cs.ecn_force, cs.ecn_ft,
+           cs.ec_matched);
+}
+
 }  // namespace cdem

@@ -194,6 +194,9 @@ void index_pairs(const Model& m, ContactSet& cs);
 void index_edge_pairs(const Model& m, ContactSet& cs);
 void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& active, double& pen_ratio);
 
+// Bytes held by the contact set (capacity x element size of every array).
+std::size_t contact_bytes(const ContactSet& cs);
+
 // Elastic energy stored in the contacts (J) and their dissipation so far (J).
 double contact_energy(const ContactSet& cs);
 double contact_dissipated(const ContactSet& cs);

@@ -225,6 +225,11 @@ std::size_t model_bytes(const Model& m) {
        bytes_of(m.sp_w) + bytes_of(m.sp_slip) + bytes_of(m.sp_dil) + bytes_of(m.sp_g0) +
        bytes_of(m.sp_state) + bytes_of(m.sp_mode) + bytes_of(m.sp_break_time) +
        bytes_of(m.sp_dissipated) + bytes_of(m.block_iface_offset) + bytes_of(m.block_iface_list);
+  // the tied mode's clusters and lists
+  b += bytes_of(m.sp_tied) + bytes_of(m.vtx_offset) + bytes_of(m.vtx_nodes) + bytes_of(m.vtx_run) +
+       bytes_of(m.iface_check) + bytes_of(m.iface_active) + bytes_of(m.active_ifaces) +
+       bytes_of(m.block_active) + bytes_of(m.vtx_scratch) + bytes_of(m.tie_reject) +
+       bytes_of(m.mat_lambda) + bytes_of(m.mat_shear);
   b += bytes_of(m.block_materials) + bytes_of(m.iface_materials) + bytes_of(m.spring_laws) +
        bytes_of(m.region_names) + bytes_of(m.facet_sets);
   for (const auto& s : m.facet_sets) b += bytes_of(s.facets);
@@ -498,6 +503,7 @@ int run_bench(const BenchOptions& opt) {
   const double speedup = r1.wall / r2.wall;
   const double step_gbs = bytes.total() / step_s / 1e9;
   const double solver_extra = static_cast<double>(sim.solver_bytes());
+  const double contact_extra = static_cast<double>(contact_bytes(sim.contact()));
   const double load1 = load_average();
   // CPU time / (wall time x threads): below 1 when the process did not have its cores (a busy
   // machine); the 1-thread CPU time per block-step is then the more trustworthy cost figure.
@@ -524,6 +530,7 @@ int run_bench(const BenchOptions& opt) {
             "\"ns_per_block_step_1_thread\": {:.4g}, \"ns_per_block_step_2_threads\": {:.4g}, "
             "\"speedup_2_threads\": {:.4g}, "
             "\"bytes_per_block\": {:.1f}, \"bytes_per_block_with_solver\": {:.1f}, "
+            "\"bytes_per_block_with_contact\": {:.1f}, "
             "\"triad_gb_s\": {:.4g}, \"triad_ws_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
             "\"step_gb_s_estimate\": {:.4g}, \"bandwidth_fraction\": {:.4g}, "
             "\"bandwidth_fraction_ws\": {:.4g}, \"polar_iterations\": {:.3g}, "
@@ -536,7 +543,8 @@ int run_bench(const BenchOptions& opt) {
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
             warm_steps, broken0, rm.broken_end, ns_block, block_rate, spring_rate,
             r1.wall / (nb * steps) * 1e9, r2.wall / (nb * steps) * 1e9, speedup,
-            static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb, triad,
+            static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb,
+            (static_cast<double>(mem) + solver_extra + contact_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
             cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
             rm.pairs, rm.active_max, m0.tied ? "tied" : "springs", setup_s, mesh_s, parts.topology,
@@ -628,9 +636,10 @@ int run_bench(const BenchOptions& opt) {
         "  WARNING: the machine is busy (other processes share the cores): wall times, the\n"
         "  speed-up and the bandwidth fraction are pessimistic; compare CPU times.\n";
   out += fmt::format(
-      "memory: Model {:.0f} bytes per block (target <= 1024), {:.0f} with the solver's per-node "
-      "arrays\n",
-      static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb);
+      "memory: Model {:.0f} bytes per block, {:.0f} with the solver's per-node arrays, {:.0f} with "
+      "general contact's (target <= 1024 in all)\n",
+      static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb,
+      (static_cast<double>(mem) + solver_extra + contact_extra) / nb);
   out += fmt::format(
       "bandwidth: triad a = b + s c, 3 x {:.0f} MB, 2 threads, best of 5: {:.2f} GB/s\n",
       triad_n * 8.0 / 1e6, triad);

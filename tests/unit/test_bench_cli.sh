@@ -5,17 +5,8 @@
 # report's structure and counts are checked: timings are never asserted (a shared machine).
 #
 #   bash test_bench_cli.sh <cdemblast-binary> <repo-root>
-set -euo pipefail
-
-BIN=${1:?usage: test_bench_cli.sh <cdemblast-binary> <repo-root>}
-ROOT=${2:?usage: test_bench_cli.sh <cdemblast-binary> <repo-root>}
-PY=/usr/bin/python3
+source "$(dirname "$0")/../script_preamble.sh" "$@"
 CASE="$ROOT/examples/single_hole_2d/bar.toml"
-fail() { echo "FAIL: $*" >&2; exit 1; }
-
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
-export OMP_WAIT_POLICY=PASSIVE
 
 # json FILE KEY=VALUE...: every key holds the value (a string compared as such, else a number).
 json() {

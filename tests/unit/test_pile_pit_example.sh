@@ -5,17 +5,8 @@
 # scheme C runs 20 steps to the end (the full 0.05 s runs are docs/pile_pit_3d.md's, not CI's).
 #
 #   bash test_pile_pit_example.sh <cdemblast-binary> <repo-root>
-set -euo pipefail
-
-BIN=${1:?usage: test_pile_pit_example.sh <cdemblast-binary> <repo-root>}
-ROOT=${2:?usage: test_pile_pit_example.sh <cdemblast-binary> <repo-root>}
-PY=/usr/bin/python3
+source "$(dirname "$0")/../script_preamble.sh" "$@"
 EX="$ROOT/examples/pile_pit_3d"
-fail() { echo "FAIL: $*" >&2; exit 1; }
-
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
-export OMP_WAIT_POLICY=PASSIVE
 
 # One line per variant: name, then its --set arguments (NUL-free, one per line in a file).
 "$PY" - "$EX/study.toml" "$TMP" <<'EOT'

@@ -107,8 +107,18 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       g.list_aperture[k] = o ? aperture(i) : 0.0;
     }
   }
-  // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed)
+  // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed, the
+  // choked flux per density of each body: computed once per body, the same value for all its
+  // cracks)
   if (cracks) {
+    g.front_speed.assign(nb, 0.0);  // (no reallocation after the first step)
+    for (std::size_t k = 0; k < nb; ++k) {
+      const GasBody& gs = g.bodies[k];
+      const double mgas = gs.gas_mass(), vol = gs.volume();
+      if (gs.model != GasModel::Cracks || !(mgas > 0) || !(vol > 0)) continue;
+      const double rho = mgas / vol;
+      g.front_speed[k] = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
+    }
     for (std::size_t k = 0; k < nlist; ++k) {
       if (!g.list_open[k]) continue;
       const std::size_t i = iface_at(k);
@@ -125,8 +135,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       if (gs.model != GasModel::Cracks) continue;
       const double mgas = gs.gas_mass(), vol = gs.volume();
       if (g.iface_fill[i] < 1.0f && mgas > 0 && vol > 0) {
-        const double rho = mgas / vol;
-        const double c = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
+        const double c = g.front_speed[d];
         const double lc = 0.5 * (m.block_size[ba] + m.block_size[bb]);
         const double f = std::min(1.0, g.iface_fill[i] + dt * c / lc);
         g.iface_fill[i] = static_cast<float>(f);
@@ -177,17 +186,25 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       gs.m_cracks = rho * gs.v_cracks;
     }
   }
-  // 3. the filled cracks' faces pushed apart by f P
+  // 3. the filled cracks' faces pushed apart by f P: the pressures in parallel (into the
+  // apertures' array, no longer needed), then the loads in list order
   if (cracks) {
-    for (std::size_t k = 0; k < nlist; ++k) {
-      const std::size_t i = iface_at(k);
+    const auto nl = static_cast<std::int64_t>(nlist);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < nl; ++k) {
+      const std::size_t i = iface_at(static_cast<std::size_t>(k));
       const std::int32_t d = g.iface_body[i];
-      g.iface_gas_p[i] = 0.0f;
-      if (d < 0 || g.bodies[d].model != GasModel::Cracks || !g.list_open[k]) continue;
-      if (!(g.list_aperture[k] > 0)) continue;
-      const double p = g.iface_fill[i] * g.bodies[d].pressure;
-      if (!(p > 0)) continue;
+      double p = 0;
+      if (d >= 0 && g.bodies[d].model == GasModel::Cracks && g.list_open[k] && g.list_aperture[k] > 0)
+        p = g.iface_fill[i] * g.bodies[d].pressure;
+      if (!(p > 0)) p = 0;
       g.iface_gas_p[i] = static_cast<float>(p);
+      g.list_aperture[k] = p;
+    }
+    for (std::size_t k = 0; k < nlist; ++k) {
+      const double p = g.list_aperture[k];
+      if (!(p > 0)) continue;
+      const std::size_t i = iface_at(k);
       const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
       for (int q = 0; q < np; ++q) {
         out.add(m, m.sp_b[i * np + q], f);

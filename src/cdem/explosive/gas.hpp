@@ -81,7 +81,8 @@ struct GasField {
   // this step, per interface of the crack list (update_gas): open (every point untied / broken)
   // and its mean aperture (m); computed in parallel before the serial passes that use them
   std::vector<std::uint8_t> list_open;
-  std::vector<double> list_aperture;
+  std::vector<double> list_aperture;  // (then, in the face-load pass, each one's gas pressure)
+  std::vector<double> front_speed;    // this step, per body: the crack front's speed (m/s)
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;

@@ -532,7 +532,11 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
   }
   // The near list: each thread flags and counts a contiguous range of pairs, then writes its
-  // near pairs at its offset, so the list is in pair order for any thread count.
+  // near pairs at its offset, so the list is in pair order for any thread count. (The counts are
+  // sized for the thread count at the last build; a run's thread count may have grown since:
+  // thread_governor.hpp, or bench's 2-thread loop from a 1-thread set-up.)
+  if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.near_count.size() < want)
+    cs.near_count.assign(want, 0);
 #pragma omp parallel
   {
     const auto t = static_cast<std::int64_t>(omp_get_thread_num());

@@ -74,7 +74,8 @@ TEST(ThreadGovernor, ProbesBothNeighboursInTheMiddle) {
 TEST(ThreadGovernor, DifferencesWithinTheMarginAreNoise) {
   ThreadsRestored restore;
   ThreadGovernor g(2, true, 1.0, 0.5, 0.05, 0.1);
-  EXPECT_EQ(drive(g, 10.0, [](int n) { return n == 2 ? 1e-3 : 0.95e-3; }), 0);  // 1 thread 5 % faster
+  EXPECT_EQ(drive(g, 10.0, [](int n) { return n == 2 ? 1e-3 : 0.95e-3; }),
+            0);  // 1 thread 5 % faster
   EXPECT_EQ(g.threads(), 2);
 }
 

@@ -57,8 +57,8 @@ std::string ThreadGovernor::after_step(double step_s) {
       steady_s_ = 0;
       if (rate > rate_current_ * (1.0 + margin_)) {
         ++switches_;
-        return fmt::format("threads {} -> {}: {:.4g} steps/s against {:.4g} with {} ({})", from_, n_,
-                           rate, rate_current_, from_,
+        return fmt::format("threads {} -> {}: {:.4g} steps/s against {:.4g} with {} ({})", from_,
+                           n_, rate, rate_current_, from_,
                            n_ < from_ ? "other work holds a core" : "a core is free again");
       }
       set(from_);

@@ -184,6 +184,10 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
 // due. dt: the step (for the tangential increment and the damping).
 void contact_forces(Model& m, ContactSet& cs, double dt);
 
+// The broad phase (contact_broad_phase.cpp): the candidate faces and the (node, block) pairs
+// anew, the state of the pairs that persist carried over; then index_pairs.
+void rebuild_contact_pairs(Model& m, ContactSet& cs);
+
 // Rebuilds what is derived from the pairs (the distinct blocks, the step's work lists, their
 // capacities): at every rebuild, and after the pairs were loaded from a checkpoint.
 void index_pairs(const Model& m, ContactSet& cs);

@@ -1,0 +1,315 @@
+// General contact's broad phase (physics/contact.hpp): the bodies, the candidate faces and
+// nodes, the (node, block) pairs found through a hashed cell grid, the previous pairs' state
+// carried over, and the lists derived from the pairs. Split from contact.cpp, which keeps the
+// set-up and the per-step narrow phase.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "cdem/mesh/element_geometry.hpp"
+#include "cdem/physics/contact.hpp"
+
+namespace cdem {
+namespace {
+
+// The nodes of block face slot f (4 b + k), outward order; returns their count (2 or 3).
+inline int face_nodes(const Model& m, std::int32_t f, std::int32_t* q) {
+  const std::int32_t b = f / 4, k = f % 4;
+  const LocalFaces lf = local_faces(m.block_type[b]);
+  const std::int32_t n0 = m.block_first_node[b];
+  for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = n0 + lf.f[k][i];
+  return lf.nodes_per_face;
+}
+
+std::int32_t find_root(std::vector<std::int32_t>& p, std::int32_t x) {
+  while (p[x] != x) x = p[x] = p[p[x]];
+  return x;
+}
+// Are nodes n and q (split from one vertex) bonded: tied in one cluster, or joined by a spring
+// point that is not released (that point is their contact)?
+bool bonded(const Model& m, std::int32_t n, std::int32_t q) {
+  const std::int32_t b = m.node_block(static_cast<std::size_t>(n));
+  const int np = m.springs_per_iface;
+  for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+    const std::int32_t code = m.block_iface_list[e];
+    const bool a_side = code > 0;
+    const std::size_t s0 = static_cast<std::size_t>((a_side ? code : -code) - 1) * np;
+    for (int i = 0; i < np; ++i) {
+      const std::size_t s = s0 + i;
+      const std::int32_t mine = a_side ? m.sp_a[s] : m.sp_b[s];
+      const std::int32_t other = a_side ? m.sp_b[s] : m.sp_a[s];
+      if (mine == n && other == q) return m.sp_state[s] != kReleased || (m.tied && m.sp_tied[s]);
+    }
+  }
+  return false;
+}
+
+inline std::uint64_t cell_hash(std::int64_t i, std::int64_t j, std::int64_t k) {
+  return static_cast<std::uint64_t>(i) * 73856093ULL ^ static_cast<std::uint64_t>(j) * 19349663ULL ^
+         static_cast<std::uint64_t>(k) * 83492791ULL;
+}
+
+}  // namespace
+
+void rebuild_contact_pairs(Model& m, ContactSet& cs) {
+  const std::size_t nb = m.n_blocks(), ni = m.n_ifaces();
+  const int np = m.springs_per_iface;
+  ++cs.rebuilds;
+  // The previous pairs and their state, merged into the new list at the end.
+  std::vector<std::int32_t> old_node, old_face;
+  std::vector<double> old_fn, old_diss, old_gap, old_k, old_g0;
+  std::vector<Vec3> old_ft, old_force;
+  old_node.swap(cs.pair_node);
+  old_face.swap(cs.pair_block);
+  old_fn.swap(cs.pair_fn);
+  old_diss.swap(cs.pair_diss);
+  old_gap.swap(cs.pair_gap);
+  old_k.swap(cs.pair_k);
+  old_g0.swap(cs.pair_g0);
+  old_ft.swap(cs.pair_ft);
+  old_force.swap(cs.pair_force);
+  // 1. Bodies: blocks connected through points that are not released.
+  cs.body.resize(nb);
+  std::iota(cs.body.begin(), cs.body.end(), 0);
+  std::vector<std::uint8_t> iface_released(ni, 0), iface_cracked(ni, 0);
+  for (std::size_t i = 0; i < ni; ++i) {
+    bool joined = false, released = false, cracked = false;
+    for (int q = 0; q < np; ++q) {
+      const auto st = m.sp_state[i * np + q];
+      joined = joined || st != kReleased;
+      released = released || st == kReleased;
+      cracked = cracked || st != kIntact;
+    }
+    iface_released[i] = released;
+    iface_cracked[i] = cracked;
+    if (joined) {
+      const auto ra = find_root(cs.body, m.iface_block_a[i]), rb = find_root(cs.body, m.iface_block_b[i]);
+      if (ra != rb) cs.body[std::max(ra, rb)] = std::min(ra, rb);
+    }
+  }
+  for (std::size_t b = 0; b < nb; ++b) cs.body[b] = find_root(cs.body, static_cast<std::int32_t>(b));
+  // 2. Candidate faces: boundary faces and faces of interfaces with a released point.
+  cs.cand_faces.clear();
+  cs.on_released.assign(m.n_nodes(), 0);
+  cs.face_cand.assign(cs.face_iface.size(), 0);
+  std::int32_t q[3];
+  for (std::size_t f = 0; f < cs.face_iface.size(); ++f) {
+    const std::int32_t b = static_cast<std::int32_t>(f / 4), k = static_cast<std::int32_t>(f % 4);
+    if (k >= local_faces(m.block_type[b]).count) continue;
+    const std::int32_t i = cs.face_iface[f];
+    if (i >= 0 && !(cs.cfg.cracked_faces ? iface_cracked[i] : iface_released[i])) continue;
+    cs.cand_faces.push_back(static_cast<std::int32_t>(f));
+    cs.face_cand[f] = 1;
+    if (i >= 0 && iface_released[i]) {
+      const int c = face_nodes(m, static_cast<std::int32_t>(f), q);
+      for (int j = 0; j < c; ++j) cs.on_released[q[j]] = 1;
+    }
+  }
+  // 3. Candidate nodes: the nodes of the candidate faces.
+  cs.cand_nodes.clear();
+  for (auto f : cs.cand_faces) {
+    const int c = face_nodes(m, f, q);
+    for (int j = 0; j < c; ++j) cs.cand_nodes.push_back(q[j]);
+  }
+  std::sort(cs.cand_nodes.begin(), cs.cand_nodes.end());
+  cs.cand_nodes.erase(std::unique(cs.cand_nodes.begin(), cs.cand_nodes.end()), cs.cand_nodes.end());
+  cs.x_build.resize(cs.cand_nodes.size());
+  for (std::size_t j = 0; j < cs.cand_nodes.size(); ++j) cs.x_build[j] = m.x[cs.cand_nodes[j]];
+  // 4. Grid: the box of each block with a candidate face, grown by the skin, registered in every
+  // cell it overlaps (cell size: twice the median grown box, so a box covers at most 2^dim cells
+  // but rarely more). A node outside it is more than a skin away from the block, so it cannot
+  // reach the block before the next build (each of the two moves less than skin / 2). (Boxes of
+  // the candidate faces grown by the skin and half the block's size, as before, held 3-5 times
+  // as many nodes per block in a graded mesh: small blocks near a large one.)
+  std::vector<std::int32_t> cand_block;     // ascending
+  std::vector<std::uint8_t> cand_released;  // the block has a candidate face that is released
+  for (const auto f : cs.cand_faces) {
+    const std::int32_t bf = f / 4;
+    if (cand_block.empty() || cand_block.back() != bf) cand_block.push_back(bf), cand_released.push_back(0);
+    if (cs.face_iface[f] >= 0 && iface_released[cs.face_iface[f]]) cand_released.back() = 1;
+  }
+  const std::size_t nf = cand_block.size();
+  std::vector<Vec3> lo(nf), hi(nf);
+  std::vector<double> ext(nf);
+  for (std::size_t j = 0; j < nf; ++j) {
+    const std::int32_t bf = cand_block[j];
+    Vec3 a = m.x[m.block_first_node[bf]], b = a;
+    for (auto qn = m.block_first_node[bf] + 1; qn < m.block_first_node[bf + 1]; ++qn)
+      for (int d = 0; d < 3; ++d) a[d] = std::min(a[d], m.x[qn][d]), b[d] = std::max(b[d], m.x[qn][d]);
+    for (int d = 0; d < cs.dim; ++d) a[d] -= cs.skin, b[d] += cs.skin;
+    lo[j] = a;
+    hi[j] = b;
+    double e = 0;
+    for (int d = 0; d < cs.dim; ++d) e = std::max(e, b[d] - a[d]);
+    ext[j] = e;
+  }
+  cs.pair_node.clear();
+  cs.pair_block.clear();
+  if (nf > 0 && !cs.cand_nodes.empty()) {
+    std::vector<double> sorted_ext = ext;
+    std::nth_element(sorted_ext.begin(), sorted_ext.begin() + nf / 2, sorted_ext.end());
+    const double cell = std::max(2.0 * sorted_ext[nf / 2], 1e-12);
+    std::size_t tsize = 1;
+    while (tsize < 2 * nf) tsize <<= 1;
+    const std::uint64_t mask = tsize - 1;
+    auto idx = [&](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
+    auto for_cells = [&](std::size_t j, auto&& fn) {
+      const std::int64_t i0 = idx(lo[j].x), i1 = idx(hi[j].x), j0 = idx(lo[j].y), j1 = idx(hi[j].y);
+      const std::int64_t k0 = cs.dim == 3 ? idx(lo[j].z) : 0, k1 = cs.dim == 3 ? idx(hi[j].z) : 0;
+      for (auto a = i0; a <= i1; ++a)
+        for (auto b = j0; b <= j1; ++b)
+          for (auto c = k0; c <= k1; ++c) fn(cell_hash(a, b, c) & mask);
+    };
+    cs.bucket_offset.assign(tsize + 1, 0);
+    for (std::size_t j = 0; j < nf; ++j) for_cells(j, [&](std::uint64_t h) { ++cs.bucket_offset[h + 1]; });
+    for (std::size_t h = 0; h < tsize; ++h) cs.bucket_offset[h + 1] += cs.bucket_offset[h];
+    cs.bucket_entry.resize(cs.bucket_offset[tsize]);
+    {
+      std::vector<std::int32_t> fill(cs.bucket_offset.begin(), cs.bucket_offset.end() - 1);
+      for (std::size_t j = 0; j < nf; ++j)
+        for_cells(j, [&](std::uint64_t h) { cs.bucket_entry[fill[h]++] = static_cast<std::int32_t>(j); });
+    }
+    // 5. Pairs, node by node (ascending), blocks ascending: each thread takes a contiguous
+    // range of the candidate nodes and lists its pairs; the lists are joined in thread order, so
+    // the pairs are the same, in the same order, for any thread count.
+    const auto ncn = static_cast<std::int64_t>(cs.cand_nodes.size());
+    const int nt = omp_get_max_threads();
+    std::vector<std::vector<std::int32_t>> t_node(nt), t_block(nt);
+#pragma omp parallel num_threads(nt)
+    {
+      const auto t = static_cast<std::int64_t>(omp_get_thread_num());
+      const auto ntt = static_cast<std::int64_t>(omp_get_num_threads());
+      std::vector<std::int32_t> near_blocks;
+      std::vector<std::int32_t>& out_node = t_node[static_cast<std::size_t>(t)];
+      std::vector<std::int32_t>& out_block = t_block[static_cast<std::size_t>(t)];
+      for (std::int64_t jn = ncn * t / ntt; jn < ncn * (t + 1) / ntt; ++jn) {
+        const std::int32_t n = cs.cand_nodes[static_cast<std::size_t>(jn)];
+        const Vec3 x = m.x[n];
+        const auto h = cell_hash(idx(x.x), idx(x.y), cs.dim == 3 ? idx(x.z) : 0) & mask;
+        const std::int32_t bn = m.node_block(static_cast<std::size_t>(n));
+        near_blocks.clear();
+        for (auto e = cs.bucket_offset[h]; e < cs.bucket_offset[h + 1]; ++e) {
+          const auto j = static_cast<std::size_t>(cs.bucket_entry[e]);
+          bool inside = true;
+          for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= lo[j][d] && x[d] <= hi[j][d];
+          if (!inside) continue;
+          const std::int32_t bf = cand_block[j];
+          if (bf == bn) continue;
+          const bool released = cs.on_released[n] || cand_released[j];
+          if (cs.body[bf] == cs.body[bn] && !released) continue;
+          near_blocks.push_back(bf);
+        }
+        std::sort(near_blocks.begin(), near_blocks.end());
+        near_blocks.erase(std::unique(near_blocks.begin(), near_blocks.end()), near_blocks.end());
+        for (auto bf : near_blocks) {
+          bool skip = false;
+          for (auto qn = m.block_first_node[bf]; qn < m.block_first_node[bf + 1] && !skip; ++qn)
+            skip = m.node_vertex[qn] == m.node_vertex[n] && bonded(m, n, qn);
+          if (skip) continue;
+          out_node.push_back(n);
+          out_block.push_back(bf);
+        }
+      }
+    }
+    std::size_t total = 0;  // (reserved exactly: the capacity is the same for any thread count)
+    for (int t = 0; t < nt; ++t) total += t_node[t].size();
+    cs.pair_node.reserve(total);
+    cs.pair_block.reserve(total);
+    for (int t = 0; t < nt; ++t) {
+      cs.pair_node.insert(cs.pair_node.end(), t_node[t].begin(), t_node[t].end());
+      cs.pair_block.insert(cs.pair_block.end(), t_block[t].begin(), t_block[t].end());
+    }
+  }
+  // 6. Carry the state of the pairs that stay (both lists sorted by (node, block)); a pair that
+  // is dropped while holding elastic energy books it as dissipated (the balance stays closed).
+  const std::size_t npair = cs.pair_node.size();
+  cs.pair_fn.assign(npair, 0.0);
+  cs.pair_diss.assign(npair, 0.0);
+  cs.pair_gap.assign(npair, 0.0);
+  cs.pair_g0.assign(npair, 0.0);
+  cs.pair_k.assign(npair, 0.0);
+  cs.pair_ft.assign(npair, Vec3{});
+  cs.pair_force.assign(npair, Vec3{});
+  cs.pair_w.assign(npair, {0.0, 0.0, 0.0, 0.0});
+  std::vector<std::int8_t> old_kf;
+  old_kf.swap(cs.pair_kf);
+  cs.pair_kf.assign(npair, -1);
+  {
+    std::size_t o = 0;
+    const std::size_t nold = old_node.size();
+    auto older = [&](std::size_t a, std::size_t p) {
+      return old_node[a] != cs.pair_node[p] ? old_node[a] < cs.pair_node[p] : old_face[a] < cs.pair_block[p];
+    };
+    auto drop = [&](std::size_t a) {
+      cs.diss_closed += old_diss[a];
+      if (old_k[a] > 0)
+        cs.diss_closed += 0.5 * old_k[a] * old_gap[a] * old_gap[a] +
+                          0.5 * dot(old_ft[a], old_ft[a]) / (cs.shear_ratio * old_k[a]);
+    };
+    for (std::size_t p = 0; p < npair; ++p) {
+      while (o < nold && older(o, p)) drop(o++);
+      if (o < nold && old_node[o] == cs.pair_node[p] && old_face[o] == cs.pair_block[p]) {
+        cs.pair_fn[p] = old_fn[o];
+        cs.pair_diss[p] = old_diss[o];
+        cs.pair_gap[p] = old_gap[o];
+        cs.pair_g0[p] = old_g0[o];
+        cs.pair_ft[p] = old_ft[o];
+        cs.pair_force[p] = old_force[o];
+        cs.pair_kf[p] = old_kf[o];
+        ++o;
+      }
+    }
+    while (o < nold) drop(o++);
+  }
+  // The pair's stiffness: the smallest of the node's and the block nodes' budgets.
+  for (std::size_t p = 0; p < npair; ++p) {
+    const std::int32_t b = cs.pair_block[p];
+    double k = cs.kc[cs.pair_node[p]];
+    for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) k = std::min(k, cs.kc[qn]);
+    cs.pair_k[p] = k;
+  }
+  // 7. The lists derived from the pairs.
+  index_pairs(m, cs);
+  cs.released_seen = m.released_points;
+  cs.release_drift = 0;
+}
+
+void index_pairs(const Model& m, ContactSet& cs) {
+  // The distinct blocks of the pairs (their bounding spheres are computed once per step for the
+  // quick reject) and the step's work lists, sized here so that a step allocates nothing.
+  const std::size_t npair = cs.pair_node.size();
+  cs.block_slot.assign(m.n_blocks(), -1);
+  cs.cblock.clear();
+  cs.pair_cb.resize(npair);
+  for (std::size_t p = 0; p < npair; ++p) {
+    std::int32_t& slot = cs.block_slot[cs.pair_block[p]];
+    if (slot < 0) {
+      slot = static_cast<std::int32_t>(cs.cblock.size());
+      cs.cblock.push_back(cs.pair_block[p]);
+    }
+    cs.pair_cb[p] = slot;
+  }
+  cs.cb_geom.resize(cs.cblock.size());
+  cs.pair_g.resize(npair);
+  cs.pair_score.resize(npair);
+  cs.pair_kf_now.resize(npair);
+  cs.pair_margin.resize(npair);
+  cs.pair_n.resize(npair);
+  cs.pair_w.resize(npair);
+  cs.pair_near.assign(npair, 0);
+  cs.pair_off.assign(npair, 0);
+  cs.pair_wake.assign(npair, 0.0);  // every pair tested at the next step
+  cs.node_drift.assign(m.n_nodes(), 0.0);
+  cs.cb_drift.assign(2 * cs.cblock.size(), 0.0);
+  cs.face_touched.reserve(4 * cs.cblock.size());
+  cs.face_sum.reserve(4 * cs.cblock.size());
+  cs.near.reserve(npair);
+  cs.near_group.reserve(npair + 1);
+  cs.near_count.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
+  index_edge_pairs(m, cs);
+}
+
+}  // namespace cdem

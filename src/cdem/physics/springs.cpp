@@ -530,38 +530,24 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   return released;
 }
 
-// Tied mode: the active interfaces (those with an untied point; their normals kept from
-// activation on) in chunks of the list, tied points skipped: the same arithmetic as
-// spring_forces_tied.
-template <int NP, bool kG0>
-void spring_forces_tied_chunked(Model& m, double dt, double t) {
-  const auto na = static_cast<std::int64_t>(m.active_ifaces.size());
-  const std::int64_t nc = (na + kChunk - 1) / kChunk;
-  const bool fe = !m.sp_w.empty();
-  const std::int32_t* list = m.active_ifaces.data();
-  std::int64_t released = 0;
-#pragma omp parallel for schedule(static) reduction(+ : released)
-  for (std::int64_t c = 0; c < nc; ++c) {
-    const std::int64_t k0 = c * kChunk;
-    released += spring_chunk<NP, kG0, true>(m, k0, static_cast<int>(std::min<std::int64_t>(kChunk, na - k0)),
-                                            dt, t, fe, list);
-  }
-  m.released_points += released;
-  m.iface_normal_set = true;
-}
-
-template <int NP, bool kG0>
+// Every interface in chunks (springs mode), or (kList, the tied mode) the active interfaces --
+// those with an untied point, their normals kept from activation on -- in chunks of that list,
+// tied points skipped: the same arithmetic as spring_forces_generic and spring_forces_tied.
+template <int NP, bool kG0, bool kList = false>
 void spring_forces_chunked(Model& m, double dt, double t) {
-  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+  const std::int32_t* list = kList ? m.active_ifaces.data() : nullptr;
+  const auto ni = static_cast<std::int64_t>(kList ? m.active_ifaces.size() : m.n_ifaces());
   const std::int64_t nc = (ni + kChunk - 1) / kChunk;
   const bool fe = !m.sp_w.empty();
   std::int64_t released = 0;
 #pragma omp parallel for schedule(static) reduction(+ : released)
   for (std::int64_t c = 0; c < nc; ++c) {
     const std::int64_t i0 = c * kChunk;
-    released += spring_chunk<NP, kG0>(m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe);
+    released += spring_chunk<NP, kG0, kList>(
+        m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe, list);
   }
   m.released_points += released;
+  if (kList) m.iface_normal_set = true;
 }
 
 }  // namespace
@@ -574,9 +560,9 @@ void spring_forces(Model& m, double dt, double t) {
   const bool g0 = !m.sp_g0.empty();
   if (m.tied) {
     if (m.springs_per_iface == 3)
-      g0 ? spring_forces_tied_chunked<3, true>(m, dt, t) : spring_forces_tied_chunked<3, false>(m, dt, t);
+      g0 ? spring_forces_chunked<3, true, true>(m, dt, t) : spring_forces_chunked<3, false, true>(m, dt, t);
     else if (m.springs_per_iface == 2)
-      g0 ? spring_forces_tied_chunked<2, true>(m, dt, t) : spring_forces_tied_chunked<2, false>(m, dt, t);
+      g0 ? spring_forces_chunked<2, true, true>(m, dt, t) : spring_forces_chunked<2, false, true>(m, dt, t);
     else
       spring_forces_tied(m, dt, t);
     return;

@@ -3,6 +3,7 @@
 // penetration, separation), sliding on an incline in 2D and 3D (stick below the friction angle,
 // g (sin - mu cos) above), a 200 m/s fragment against a wall (with a tiny skin too), the rebuild
 // trigger, a stack settling under gravity, 1 vs 2 threads, and a released pair caught again.
+#include <array>
 #include <gtest/gtest.h>
 
 #include <functional>
@@ -382,11 +383,12 @@ TEST(ContactStack, SettlesUnderGravity) {
 // ---------------------------------------------------------------------------------------------
 // The 3D impact with the thread count of each step given by threads_at(step) (set-up at that of
 // step 0).
-auto impact_run(const std::function<int(int)>& threads_at) {
+auto impact_run(const std::function<int(int)>& threads_at, bool sleep = true,
+                std::array<std::int64_t, 2>* tests = nullptr, double gap = 1e-3) {
   ScopedThreads th(threads_at(0));
   const double size = 0.1;
   const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
-  Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + 1e-3, 0.02, 0}), "");
+  Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + gap, 0.02, 0}), "");
   mesh.region_names = {"a", "b"};
   for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
   const auto glue = interface_of(InterfaceLaw::MohrCoulomb, 1e5, 3e5, 30);
@@ -394,11 +396,13 @@ auto impact_run(const std::function<int(int)>& threads_at) {
   for (std::size_t n = 0; n < model.n_nodes(); ++n)
     model.v[n] = {model.block_region[model.node_block(n)] == 0 ? 5.0 : -5.0, 0.3, 0};
   Case c = contact_case({mat_a, mat_b}, glue, 0.4);
+  c.contact.sleep = sleep;
   Simulation sim(std::move(model), c);
   for (int k = 0; k < 300; ++k) {
     omp_set_num_threads(threads_at(k));
     sim.step(k % 7 == 0);
   }
+  if (tests) *tests = {sim.contact().pair_tests, sim.contact().block_pair_tests};
   return std::make_tuple(sim.model().x, sim.model().v, sim.contact().pair_force,
                          sim.contact().active_max, sim.energy().contact_friction);
 }
@@ -412,6 +416,24 @@ void expect_same_impact(const R& a, const R& b) {
   EXPECT_TRUE(same_bits(std::get<1>(a), std::get<1>(b)));
   EXPECT_TRUE(same_bits(std::get<2>(a), std::get<2>(b)));
   EXPECT_EQ(std::memcmp(&std::get<4>(a), &std::get<4>(b), sizeof(double)), 0);
+}
+
+// The sleep of far pairs (contact.cpp, contact_edges.cpp) skips only tests that could not have
+// found anything: the 3D impact (tetrahedra, the glue breaking, fragments hitting: both the
+// node-block and the block-pair sleep at work) with every pair tested every step gives the same
+// bits, and the sleep did skip most tests (else this would compare nothing). A sleep 10 times too
+// long on the face planes, of the node-block pairs or of the block pairs, fails it (the block
+// pairs' bounding spheres here overlap before their blocks come near: a longer sphere sleep
+// passes).
+TEST(ContactDeterminism, SleepChangesNothing) {
+  std::array<std::int64_t, 2> slept{}, awake{};
+  // (a gap of 1 cm, a fifth of a block, closed at 10 m/s within the run: pairs across it are
+  // found apart, sleep, and wake as the bodies come together)
+  const auto a = impact_run([](int) { return 2; }, true, &slept, 0.01);
+  const auto b = impact_run([](int) { return 2; }, false, &awake, 0.01);
+  expect_same_impact(a, b);
+  EXPECT_LT(2 * slept[0], awake[0]) << "node-block tests: " << slept[0] << " of " << awake[0];
+  EXPECT_LT(2 * slept[1], awake[1]) << "block-pair tests: " << slept[1] << " of " << awake[1];
 }
 
 TEST(ContactDeterminism, ImpactOneAndTwoThreads) {

@@ -77,6 +77,7 @@ std::string resolved_case_toml(const Case& c) {
   // existed still match: solver/run.cpp restart_signature)
   if (c.contact.cracked_faces) o += "candidates = \"cracked\"\n";
   if (!c.contact.edges) o += "edges = false\n";
+  if (!c.contact.sleep) o += "sleep = false\n";
   for (const auto& m : c.materials) {
     o += fmt::format("\n[[material]]\nname = {}\nregions = [", q(m.name));
     for (std::size_t i = 0; i < m.regions.size(); ++i) o += (i ? ", " : "") + q(m.regions[i]);

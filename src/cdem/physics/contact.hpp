@@ -60,6 +60,9 @@ struct ContactSettings {
   bool cracked_faces = false;
   // 3D: crossing edges of candidate faces push apart too (contact_edges.cpp)
   bool edges = true;
+  // far pairs and block pairs are not tested while they cannot have come near (contact.cpp,
+  // contact_edges.cpp); false tests every pair every step (the same results, slower: a check)
+  bool sleep = true;
 };
 
 // A candidate block's geometry this step: its bounding sphere grown for the quick reject
@@ -67,6 +70,10 @@ struct ContactSettings {
 struct BlockPlanes {
   Vec3 c;
   double reach2 = 0, tol = 0;
+  // a simplex's tolerance reach: how far a point behind every face plane offset by tol can be
+  // from the block (tol x the largest vertex distance from the incentre / the inradius); +inf for
+  // a quad or an inverted simplex (contact.cpp, the sleep of far pairs)
+  double rho = 0;
   int nf = 0;  // faces
   std::array<Vec3, 4> a0, n;
 };
@@ -78,6 +85,7 @@ struct TetGeom {
   std::array<Vec3, 4> x, v, n, a0;
   Vec3 c;
   double r = 0, tol = 0;
+  double rho = 0;  // simplex_tolerance_reach
   int cand_edges = 0;
 };
 
@@ -129,6 +137,18 @@ struct ContactSet {
   // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
   // at which it is tested again
   std::vector<double> pair_wake, node_drift, cb_drift;
+  // and pairs and whole nodes sleep on one number: drift_all is the sum over the steps since the
+  // build of the largest |v| dt of any node (no node's path length grew by more); per node with
+  // pairs (grp, in pair order) the start of its pairs (+ the end), the drift_all at which it is looked at again, and
+  // whether it was this step
+  double drift_all = 0;
+  std::vector<double> pair_gwake;  // per pair: the drift_all before which it is not tested again
+  std::vector<std::int32_t> grp_start;
+  std::vector<double> grp_wake;
+  std::vector<std::uint8_t> grp_awake;
+  // per candidate block, its pairs (CSR): woken, with their nodes, when the block's tolerance
+  // reach is over the cap
+  std::vector<std::int32_t> cb_pair_start, cb_pair;
   std::vector<std::int64_t> near_count;
   // face-side gather: per node its slot in the step's sums (-1 none), the nodes touched, and
   // their sums (formed in pair order, then added)
@@ -146,13 +166,16 @@ struct ContactSet {
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
   // the distinct blocks of the block pairs (ascending; rebuilt), each pair's two indices among
-  // them, and per block this step's bounding sphere (centre, radius), whether a pair needs its
-  // geometry, and that geometry (each computed once per step, not once per pair)
+  // them, and per block this step's bounding sphere (centre, radius) and geometry (each computed
+  // once per step, not once per pair)
   std::vector<std::int32_t> eb_block, bp_ia, bp_ib;
   std::vector<Vec3> eb_c;
   std::vector<double> eb_r;
-  std::vector<std::uint8_t> eb_need;
   std::vector<TetGeom> eb_geom;
+  // far block pairs sleep (contact_edges.cpp): per block of the pairs the smallest and largest
+  // path length of its nodes since the build (2 i, 2 i + 1; the largest +inf when its tolerance
+  // reach is over the cap), per block pair the bound at which it is tested again
+  std::vector<double> eb_drift, bp_wake;
   // the edge contacts holding something, sorted by (a, b, key = 6 edge of a + edge of b): the
   // ignored depth, the penetration beyond it, the stiffness, the dissipation so far, the force
   // on a's edge, and the weights of the closest points on a's edge (s) and on b's (t)
@@ -172,9 +195,22 @@ struct ContactSet {
                                          // the bound sum 2 max|v| dt on any relative motion (m)
   double diss_closed = 0;                // dissipation of pairs dropped at rebuilds (J)
   std::int64_t rebuilds = 0, active = 0, active_max = 0;
+  // geometric tests done so far: node-block pairs (sphere and planes), block pairs (edges); the
+  // sleep's saving is these against the pairs' count times the steps
+  std::int64_t pair_tests = 0, block_pair_tests = 0;
   double max_pen_ratio = 0;              // max over the run of penetration / face block size
   std::size_t pair_capacity() const { return pair_node.capacity(); }
 };
+
+// The tolerance reach of a simplex block (Tet4, Tri3) with nodes x, face planes (a0, outward unit
+// n) and tolerance tol: how far a point behind every face plane offset by tol can be from the
+// block (by 2 tol: twice as far); +inf for a quad (its offset faces need not keep to a scaled copy), an inverted or a flat
+// block. Pairs far from a block sleep only while every block they may meet stays within
+// kContactRhoCap tol (3 for a regular tetrahedron, 4-10 for most of a Gmsh mesh's; none of the
+// late SPEC 5.3 cylinder's over 20): contact.cpp, contact_edges.cpp.
+double simplex_tolerance_reach(ElemType t, const Vec3* x, const std::array<Vec3, 4>& a0,
+                               const std::array<Vec3, 4>& n, double tol);
+constexpr double kContactRhoCap = 20.0;
 
 // Set-up from the model (its interface materials give the friction, the stiffness budget as in
 // ties.hpp / springs.hpp). omega2_max: the blocks' omega_max^2 (tied mode), 0 in springs mode.

@@ -24,7 +24,8 @@
 // is dropped (its blocks no longer paired) books its stored energy as dissipated.
 //
 // Which block pairs: those with a node-to-block candidate pair either way, of different bodies,
-// both tetrahedra (index_edge_pairs, at each rebuild). Each step, per block pair in parallel: a
+// both tetrahedra (index_edge_pairs, at each rebuild). Each step, per block pair in parallel
+// (those found apart sleep while they cannot have come together: (1) below): a
 // bounding-sphere test of the two blocks, a separating face plane (all four nodes of one in
 // front of a face of the other: they cannot overlap), then per edge pair a sphere test of the
 // two edges, then the closest points. Two passes (count, then fill at fixed offsets) keep the contact list
@@ -36,6 +37,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "cdem/mesh/element_geometry.hpp"
@@ -68,6 +70,7 @@ void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g) 
     g.a0[k] = a0;
     g.n[k] = normalized(cross(g.x[lf.f[k][1]] - a0, g.x[lf.f[k][2]] - a0));
   }
+  g.rho = simplex_tolerance_reach(ElemType::Tet4, &m.x[n0], g.a0, g.n, g.tol);
   g.cand_edges = 0;
   for (int e = 0; e < 6; ++e)
     if (cs.face_cand[4 * b + kTetEdgeFaces[e][0]] || cs.face_cand[4 * b + kTetEdgeFaces[e][1]])
@@ -91,16 +94,22 @@ void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
 // ends are in front of one face plane of G by more than 2 tol has none (every point of it is in
 // front of that plane by more than 2 tol, less rounding, so `inside` rejects it and no edge pair
 // with it can hit: skipping it changes no result).
-bool separated(const TetGeom& G, const TetGeom& S, int& edges) {
+// When separated, `gap` gets how far S's nodes are in front of that plane (the least of them).
+bool separated(const TetGeom& G, const TetGeom& S, int& edges, double& gap) {
   int front2 = 0;  // bit 4 k + i: node i of S in front of face k of G by more than 2 tol
   for (int k = 0; k < 4; ++k) {
     bool all = true;
+    double least = std::numeric_limits<double>::infinity();
     for (int i = 0; i < 4; ++i) {
       const double g = dot(S.x[i] - G.a0[k], G.n[k]);
       all = all && g > G.tol;
+      least = std::min(least, g);
       if (g > 2 * G.tol) front2 |= 1 << (4 * k + i);
     }
-    if (all) return true;
+    if (all) {
+      gap = least;
+      return true;
+    }
   }
   edges = 0;
   for (int e = 0; e < 6; ++e) {
@@ -243,8 +252,9 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   const std::size_t neb = cs.eb_block.size();
   cs.eb_c.resize(neb);
   cs.eb_r.resize(neb);
-  cs.eb_need.resize(neb);
   cs.eb_geom.resize(neb);
+  cs.eb_drift.assign(2 * neb, 0.0);
+  cs.bp_wake.assign(cs.bp_a.size(), 0.0);  // every block pair tested at the next step
   cs.bp_count.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
@@ -271,41 +281,67 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       q = e;
     }
   }
-  // (0) per block its bounding sphere; the blocks of the pairs whose spheres overlap, or that
-  // held contacts, get their geometry (once per block, read by every pair)
+  // (0) per block its bounding sphere, geometry and drift bounds (node_drift: the path length of
+  // each node since the build, contact.cpp)
   const auto neb = static_cast<std::int64_t>(cs.eb_block.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i) {
-    tet_sphere(m, cs.eb_block[i], cs.eb_c[i], cs.eb_r[i]);
-    cs.eb_need[i] = 0;
+    const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
+    tet_sphere(m, b, cs.eb_c[i], cs.eb_r[i]);
+    tet_geom(m, cs, b, cs.eb_geom[i]);
+    double dmin = cs.node_drift[n0], dmax = dmin;
+    for (int k = 1; k < 4; ++k) {
+      dmin = std::min(dmin, cs.node_drift[n0 + k]);
+      dmax = std::max(dmax, cs.node_drift[n0 + k]);
+    }
+    cs.eb_drift[2 * i] = dmin;
+    cs.eb_drift[2 * i + 1] = cs.eb_geom[i].rho <= kContactRhoCap * cs.eb_geom[i].tol
+                                 ? dmax
+                                 : std::numeric_limits<double>::infinity();
   }
-  for (std::int64_t j = 0; j < nbp; ++j) {
-    const std::int32_t ia = cs.bp_ia[j], ib = cs.bp_ib[j];
-    const Vec3 d = cs.eb_c[ia] - cs.eb_c[ib];
-    const double rr = cs.eb_r[ia] + cs.eb_r[ib];
-    if (dot(d, d) <= rr * rr || cs.bp_prev_n[j] > 0) cs.eb_need[ia] = cs.eb_need[ib] = 1;
-  }
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < neb; ++i)
-    if (cs.eb_need[i]) tet_geom(m, cs, cs.eb_block[i], cs.eb_geom[i]);
   // (1) count per block pair: the edge pairs in contact now, or in contact at the last step
-  // (their last step is booked)
-#pragma omp parallel for schedule(static)
+  // (their last step is booked).
+  // The sleep of far block pairs (as for the node pairs, contact.cpp): with dD_a, dD_b bounds on
+  // how far any node of a, b has moved since a test that found the pair apart,
+  // - apart by the bounding spheres by delta: the gap |c_a - c_b| - r_a - r_b shrinks by at most
+  //   3 (dD_a + dD_b) (a centroid moves at most dD, a radius grows at most 2 dD);
+  // - separated by a face plane of one of them by delta (the other's nodes in front of it): the
+  //   blocks are at least delta apart, their points convex combinations of their nodes, so at
+  //   least delta - dD_a - dD_b apart later. An edge contact needs a point of a's edge within
+  //   tol of b's every face plane (and the other way round): within b's tolerance reach of b,
+  //   at most kContactRhoCap tol_b while b's drift bound is finite (and a block is behind its own
+//   face planes only while it is not inverted: both reaches within the cap when tested).
+  // So the pair is not tested again before dD_a + dD_b reaches delta / 3, or delta -
+  // (kContactRhoCap + 1) max(tol_a, tol_b) (one tol for rounding): no contact is missed, the
+  // results are the same bit for bit. Pairs that held contacts are tested every step.
+  std::int64_t tests = 0;
+#pragma omp parallel for schedule(static) reduction(+ : tests)
   for (std::int64_t j = 0; j < nbp; ++j) {
     const std::int32_t ia = cs.bp_ia[j], ib = cs.bp_ib[j];
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
+    const double drift_min = cs.eb_drift[2 * ia] + cs.eb_drift[2 * ib];
+    if (cs.cfg.sleep && plo == phi && cs.eb_drift[2 * ia + 1] + cs.eb_drift[2 * ib + 1] < cs.bp_wake[j]) {
+      cs.bp_count[j + 1] = 0;  // asleep
+      continue;
+    }
+    ++tests;
     const Vec3 ca = cs.eb_c[ia], cb = cs.eb_c[ib];
     const double ra = cs.eb_r[ia], rb = cs.eb_r[ib];
-    bool near = dot(ca - cb, ca - cb) <= (ra + rb) * (ra + rb);
+    const double dc2 = dot(ca - cb, ca - cb);
+    bool near = dc2 <= (ra + rb) * (ra + rb);
     if (!near && plo == phi) {  // (most pairs: blocks apart)
+      cs.bp_wake[j] = drift_min + (std::sqrt(dc2) - (ra + rb)) / 3.0;
       cs.bp_count[j + 1] = 0;
       continue;
     }
     const TetGeom& A = cs.eb_geom[ia];
     const TetGeom& B = cs.eb_geom[ib];
     int a_in = 0, b_in = 0;  // the edges of A that may reach into B, of B into A
-    near = near && (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in) &&
-           !separated(B, A, a_in);
+    double gap = 0;
+    const bool apart = near && (separated(A, B, b_in, gap) || separated(B, A, a_in, gap));
+    near = near && (A.cand_edges != 0) && (B.cand_edges != 0) && !apart;
+    if (apart && plo == phi && A.rho <= kContactRhoCap * A.tol && B.rho <= kContactRhoCap * B.tol)
+      cs.bp_wake[j] = drift_min + (gap - (kContactRhoCap + 1) * std::max(A.tol, B.tol));
     if (!near && plo == phi) {  // (most of the rest: blocks side by side across a crack)
       cs.bp_count[j + 1] = 0;
       continue;
@@ -324,6 +360,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       }
     cs.bp_count[j + 1] = count;
   }
+  cs.block_pair_tests += tests;
   for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
   const auto nec = static_cast<std::size_t>(cs.bp_count[nbp]);
   for_each_edge_array(cs, [&](auto&, auto& now) { now.resize(nec); });
@@ -339,9 +376,10 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
     auto o = static_cast<std::size_t>(cs.bp_count[j]);
     int a_in = 0, b_in = 0;
+    double apart_by = 0;
     const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r) &&
-                      (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in) &&
-                      !separated(B, A, a_in);
+                      (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in, apart_by) &&
+                      !separated(B, A, a_in, apart_by);
     const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {

@@ -327,6 +327,8 @@ struct LoopResult {
   double work = 0;            // boundary + explosive work, absorbed energy (J)
   std::int64_t pairs = 0, active_max = 0, rebuilds = 0;  // contact at the end: candidate pairs,
                                                          // most in contact, rebuilds in the loop
+  // the share of the pairs tested per step (node-block, block pairs; the rest asleep)
+  double tested = 0, block_pairs_tested = 0;
 };
 
 double process_cpu_seconds() {
@@ -384,6 +386,7 @@ LoopResult timed_loop(const PreparedCase& snapshot, int steps, int threads) {
   pc.sim.step();
   pc.sim.set_timer(&times);
   const std::int64_t rebuilds0 = pc.sim.contact().rebuilds;
+  const std::int64_t tests0 = pc.sim.contact().pair_tests, btests0 = pc.sim.contact().block_pair_tests;
   const double w0 = omp_get_wtime(), cpu0 = process_cpu_seconds();
   for (int s = 0; s < steps; ++s) {
     pc.sim.step();
@@ -397,6 +400,11 @@ LoopResult timed_loop(const PreparedCase& snapshot, int steps, int threads) {
   r.pairs = static_cast<std::int64_t>(cs.pair_node.size());
   r.active_max = cs.active_max;
   r.rebuilds = cs.rebuilds - rebuilds0;
+  if (r.pairs > 0)
+    r.tested = static_cast<double>(cs.pair_tests - tests0) / (static_cast<double>(r.pairs) * steps);
+  if (!cs.bp_a.empty())
+    r.block_pairs_tested = static_cast<double>(cs.block_pair_tests - btests0) /
+                           (static_cast<double>(cs.bp_a.size()) * steps);
   return r;
 }
 
@@ -537,7 +545,8 @@ int run_bench(const BenchOptions& opt) {
             "\"cpu_ns_per_block_step_1_thread\": {:.4g}, "
             "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
             "\"load_average\": [{:.2f}, {:.2f}], \"contact\": {}, \"released\": {}, "
-            "\"contact_pairs\": {}, \"contact_active_max\": {}, \"interface_mode\": \"{}\", "
+            "\"contact_pairs\": {}, \"contact_active_max\": {}, \"contact_tested\": {:.4g}, "
+            "\"contact_block_pairs_tested\": {:.4g}, \"interface_mode\": \"{}\", "
             "\"setup_s\": {{\"total\": {:.4g}, \"mesh\": {:.4g}, \"topology\": {:.4g}, "
             "\"charges\": {:.4g}, \"simulation\": {:.4g}}}, \"kernels\": {{{}}}}}",
             m0.n_blocks(), m0.n_nodes(), m0.n_ifaces(), m0.n_springs(), steps, threads, dt,
@@ -547,7 +556,7 @@ int run_bench(const BenchOptions& opt) {
             (static_cast<double>(mem) + solver_extra + contact_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
             cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
-            rm.pairs, rm.active_max, m0.tied ? "tied" : "springs", setup_s, mesh_s, parts.topology,
+            rm.pairs, rm.active_max, rm.tested, rm.block_pairs_tested, m0.tied ? "tied" : "springs", setup_s, mesh_s, parts.topology,
             parts.charges, parts.simulation, kernels)
             .c_str());
     return 0;
@@ -583,8 +592,9 @@ int run_bench(const BenchOptions& opt) {
   if (c.contact.enabled)
     out += fmt::format(
         "  general contact: {} candidate pairs, at most {} in contact, {} rebuilds in the timed "
-        "steps\n",
-        rm.pairs, rm.active_max, rm.rebuilds);
+        "steps; tested per step (the rest asleep): {:.1f} % of the node-block pairs, {:.1f} % of "
+        "the block pairs\n",
+        rm.pairs, rm.active_max, rm.rebuilds, 100 * rm.tested, 100 * rm.block_pairs_tested);
   else
     out += "  general contact off (--no-contact)\n";
   out += fmt::format(

@@ -230,6 +230,7 @@ std::string restart_signature(const Case& c) {
   k.max_steps = 0;
   k.checkpoint_interval = 0;
   k.checkpoint_wall_interval = 0;
+  k.contact.sleep = true;  // (the same results either way: contact.hpp)
   // without its comments (they name the file the case was read from)
   std::string out, line;
   const std::string text = resolved_case_toml(k);
@@ -290,7 +291,7 @@ void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string&
   if (sig != signature)
     throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
                                  "at {}; only simulation.end_time, output_interval, output_times, "
-                                 "history_interval, threads, max_steps and the checkpoint keys may "
+                                 "history_interval, threads, max_steps, contact.sleep and the checkpoint keys may "
                                  "change for a restart",
                                  c.path, dir, first_difference(sig, signature)));
 }

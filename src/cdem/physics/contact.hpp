@@ -171,6 +171,7 @@ struct ContactSet {
   std::vector<std::int32_t> eb_block, bp_ia, bp_ib;
   std::vector<Vec3> eb_c;
   std::vector<double> eb_r;
+  std::vector<std::uint8_t> eb_need;  // this step: 1 its geometry is needed, 2 it has it
   std::vector<TetGeom> eb_geom;
   // far block pairs sleep (contact_edges.cpp): per block of the pairs the smallest and largest
   // path length of its nodes since the build (2 i, 2 i + 1; the largest +inf when its tolerance

@@ -252,6 +252,7 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   const std::size_t neb = cs.eb_block.size();
   cs.eb_c.resize(neb);
   cs.eb_r.resize(neb);
+  cs.eb_need.assign(neb, 0);
   cs.eb_geom.resize(neb);
   cs.eb_drift.assign(2 * neb, 0.0);
   cs.bp_wake.assign(cs.bp_a.size(), 0.0);  // every block pair tested at the next step
@@ -281,24 +282,41 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       q = e;
     }
   }
-  // (0) per block its bounding sphere, geometry and drift bounds (node_drift: the path length of
-  // each node since the build, contact.cpp)
+  // (0) per block its bounding sphere, drift bounds (node_drift: the path length of each node
+  // since the build, contact.cpp) and tolerance reach: the node pairs' of this step when the block
+  // is one of theirs (cb_geom), else from its geometry, computed here (eb_need 2: it has it)
   const auto neb = static_cast<std::int64_t>(cs.eb_block.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i) {
     const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
     tet_sphere(m, b, cs.eb_c[i], cs.eb_r[i]);
-    tet_geom(m, cs, b, cs.eb_geom[i]);
     double dmin = cs.node_drift[n0], dmax = dmin;
     for (int k = 1; k < 4; ++k) {
       dmin = std::min(dmin, cs.node_drift[n0 + k]);
       dmax = std::max(dmax, cs.node_drift[n0 + k]);
     }
+    const std::int32_t slot = cs.block_slot[b];
+    cs.eb_need[i] = slot < 0 ? 2 : 0;
+    if (slot < 0) tet_geom(m, cs, b, cs.eb_geom[i]);
+    const BlockPlanes* bp = slot >= 0 ? &cs.cb_geom[slot] : nullptr;
+    const double rho = bp ? bp->rho : cs.eb_geom[i].rho, tol = bp ? bp->tol : cs.eb_geom[i].tol;
     cs.eb_drift[2 * i] = dmin;
-    cs.eb_drift[2 * i + 1] = cs.eb_geom[i].rho <= kContactRhoCap * cs.eb_geom[i].tol
-                                 ? dmax
-                                 : std::numeric_limits<double>::infinity();
+    cs.eb_drift[2 * i + 1] = rho <= kContactRhoCap * tol ? dmax : std::numeric_limits<double>::infinity();
   }
+  // the pairs awake this step (below) need their blocks' geometry: each computed once
+  const bool sleep = cs.cfg.sleep;
+  auto asleep = [&](std::int64_t j) {
+    return sleep && cs.bp_prev_n[j] == 0 &&
+           cs.eb_drift[2 * cs.bp_ia[j] + 1] + cs.eb_drift[2 * cs.bp_ib[j] + 1] < cs.bp_wake[j];
+  };
+  for (std::int64_t j = 0; j < nbp; ++j)
+    if (!asleep(j)) {
+      if (cs.eb_need[cs.bp_ia[j]] == 0) cs.eb_need[cs.bp_ia[j]] = 1;
+      if (cs.eb_need[cs.bp_ib[j]] == 0) cs.eb_need[cs.bp_ib[j]] = 1;
+    }
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < neb; ++i)
+    if (cs.eb_need[i] == 1) tet_geom(m, cs, cs.eb_block[i], cs.eb_geom[i]);
   // (1) count per block pair: the edge pairs in contact now, or in contact at the last step
   // (their last step is booked).
   // The sleep of far block pairs (as for the node pairs, contact.cpp): with dD_a, dD_b bounds on
@@ -320,7 +338,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     const std::int32_t ia = cs.bp_ia[j], ib = cs.bp_ib[j];
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
     const double drift_min = cs.eb_drift[2 * ia] + cs.eb_drift[2 * ib];
-    if (cs.cfg.sleep && plo == phi && cs.eb_drift[2 * ia + 1] + cs.eb_drift[2 * ib + 1] < cs.bp_wake[j]) {
+    if (asleep(j)) {
       cs.bp_count[j + 1] = 0;  // asleep
       continue;
     }
@@ -329,13 +347,18 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     const double ra = cs.eb_r[ia], rb = cs.eb_r[ib];
     const double dc2 = dot(ca - cb, ca - cb);
     bool near = dc2 <= (ra + rb) * (ra + rb);
-    if (!near && plo == phi) {  // (most pairs: blocks apart)
-      cs.bp_wake[j] = drift_min + (std::sqrt(dc2) - (ra + rb)) / 3.0;
+    const TetGeom& A = cs.eb_geom[ia];
+    const TetGeom& B = cs.eb_geom[ib];
+    if (!near && plo == phi) {  // (most pairs: blocks apart; the longer of the two sleeps)
+      double delta = (std::sqrt(dc2) - (ra + rb)) / 3.0, gap = 0;
+      int unused = 0;
+      if (A.rho <= kContactRhoCap * A.tol && B.rho <= kContactRhoCap * B.tol &&
+          (separated(A, B, unused, gap) || separated(B, A, unused, gap)))
+        delta = std::max(delta, gap - (kContactRhoCap + 1) * std::max(A.tol, B.tol));
+      cs.bp_wake[j] = drift_min + delta;
       cs.bp_count[j + 1] = 0;
       continue;
     }
-    const TetGeom& A = cs.eb_geom[ia];
-    const TetGeom& B = cs.eb_geom[ib];
     int a_in = 0, b_in = 0;  // the edges of A that may reach into B, of B into A
     double gap = 0;
     const bool apart = near && (separated(A, B, b_in, gap) || separated(B, A, a_in, gap));

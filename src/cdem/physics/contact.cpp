@@ -412,19 +412,14 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     Vec3 nk_all[4];
     double gprev[4], approach[4];
     for (int k = 0; k < lf.count; ++k) {
-      // (the normal computed here again, not taken from bp: the same arithmetic in another
-      // loop may round differently, and the aligned stack of test_contact.cpp, corners exactly
-      // on corners, is that sensitive)
-      const Vec3 a0 = m.x[n0 + lf.f[k][0]], a1 = m.x[n0 + lf.f[k][1]];
-      Vec3 nk, vf = m.v[n0 + lf.f[k][0]] + m.v[n0 + lf.f[k][1]];
-      if (lf.nodes_per_face == 3) {
-        nk = normalized(cross(a1 - a0, m.x[n0 + lf.f[k][2]] - a0));
+      // (the face plane of the step's block geometry: the same expressions, rounded as written
+      // without multiply-add contraction, so the same bits as computing it here again)
+      const Vec3 a0 = bp.a0[k], nk = bp.n[k];
+      Vec3 vf = m.v[n0 + lf.f[k][0]] + m.v[n0 + lf.f[k][1]];
+      if (lf.nodes_per_face == 3)
         vf = (1.0 / 3) * (vf + m.v[n0 + lf.f[k][2]]);
-      } else {
-        const Vec3 t = a1 - a0;
-        nk = normalized(Vec3{t.y, -t.x, 0.0});
+      else
         vf = 0.5 * vf;
-      }
       const double gk = dot(x - a0, nk);
       gk_all[k] = gk;
       nk_all[k] = nk;

@@ -130,11 +130,11 @@ constexpr double kSleepRate = 3.5;
 // h = max_k g_k(x), the most it lies in front of a plane. The block's points are convex
 // combinations of its nodes with fixed weights, so b(t) lies within dD_b of b(t0) (Hausdorff), and
 // the node's distance to b(t) is at least h - dD_n - dD_b. A node that passes the test lies
-// behind every plane offset by 2 tol: in the simplex scaled about its incentre I by
-// (1 + 2 tol / r_in), at most 2 rho from b, rho = tol max_i |a_i - I| / r_in the block's
-// tolerance reach (contact.hpp). So with rho <= kContactRhoCap tol, the pair cannot pass before
-// dD_n + dD_b reaches h - (2 kContactRhoCap + 1) tol (one tol more for rounding), which the wake
-// bound above implies (dD_b <= kSleepRate dD_b). A block whose rho exceeds the cap this step (a
+// behind every plane offset by tol: in the simplex scaled about its incentre I by
+// (1 + tol / r_in), at most rho = tol max_i |a_i - I| / r_in from b (the block's tolerance reach,
+// contact.hpp). So with rho <= kContactRhoCap tol, the pair cannot pass before dD_n + dD_b
+// reaches h - (kContactRhoCap + 1) tol (one tol more for rounding), which the wake bound above
+// implies (dD_b <= kSleepRate dD_b). A block whose rho exceeds the cap this step (a
 // sliver, an inverted or a flat block, a quad) has all its pairs, and their nodes, tested.
 
 // A pair is not in contact once the node's projection is this far outside its contact face, in
@@ -322,6 +322,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   const double drift_all = cs.drift_all;
   const bool sleep = cs.cfg.sleep;
   const auto ngrp = static_cast<std::int64_t>(cs.grp_wake.size());
+  // (the arrays through local pointers: a store to a byte array may alias anything, and the
+  // compiler reloaded every vector's data pointer after each)
+  const std::int8_t* const kf_ = cs.pair_kf.data();
+  const std::int32_t *const node_ = cs.pair_node.data(), *const cb_ = cs.pair_cb.data(),
+                     *const gstart = cs.grp_start.data();
+  const double *const drift = cs.node_drift.data(), *const cbd = cs.cb_drift.data();
+  const BlockPlanes* const geom = cs.cb_geom.data();
+  double *const gwake = cs.pair_gwake.data(), *const pwake = cs.pair_wake.data(),
+         *const g0 = cs.pair_g0.data(), *const grp_wake = cs.grp_wake.data();
+  std::uint8_t *const pnear = cs.pair_near.data(), *const awake = cs.grp_awake.data();
+  const Vec3* const x_ = m.x.data();
 #pragma omp parallel
   {
     const auto t = static_cast<std::int64_t>(omp_get_thread_num());
@@ -329,53 +340,49 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const std::int64_t glo = ngrp * t / nt, ghi = ngrp * (t + 1) / nt;
     std::int64_t count = 0, tests = 0;
     for (std::int64_t gr = glo; gr < ghi; ++gr) {
-      cs.grp_awake[gr] = !(sleep && drift_all < cs.grp_wake[gr]);
-      if (!cs.grp_awake[gr]) continue;
+      awake[gr] = !(sleep && drift_all < grp_wake[gr]);
+      if (!awake[gr]) continue;
       double wake = std::numeric_limits<double>::infinity();
-      for (std::int64_t p = cs.grp_start[gr]; p < cs.grp_start[gr + 1]; ++p) {
-        bool near = cs.pair_kf[p] >= 0;
-        if (!near && sleep && drift_all < cs.pair_gwake[p]) {  // (most pairs: asleep on drift_all)
-          wake = std::min(wake, cs.pair_gwake[p]);
-          cs.pair_near[p] = 0;
+      for (std::int64_t p = gstart[gr]; p < gstart[gr + 1]; ++p) {
+        bool near = kf_[p] >= 0;
+        if (!near && sleep && drift_all < gwake[p]) {  // (most pairs: asleep on drift_all)
+          wake = std::min(wake, gwake[p]);
+          pnear[p] = 0;
           continue;
         }
-        const std::int32_t n = cs.pair_node[p], j = cs.pair_cb[p];
+        const std::int32_t n = node_[p], j = cb_[p];
         // (a pair found outside the sphere by delta sleeps until the drift bound has grown by
         // delta: it cannot have come near before, and it would only be found outside again)
         if (!near) {
-          if (!sleep || cs.node_drift[n] + kSleepRate * cs.cb_drift[2 * j + 1] >= cs.pair_wake[p]) {
+          if (!sleep || drift[n] + kSleepRate * cbd[2 * j + 1] >= pwake[p]) {
             ++tests;
-            const BlockPlanes& bp = cs.cb_geom[j];
-            const Vec3 x = m.x[n];
+            const BlockPlanes& bp = geom[j];
+            const Vec3 x = x_[n];
             const Vec3 dx = x - bp.c;
             const double d2 = dot(dx, dx);
             near = !(d2 > bp.reach2);
             if (!near) {
-              cs.pair_wake[p] = cs.node_drift[n] + kSleepRate * cs.cb_drift[2 * j] +
-                                (std::sqrt(d2) - std::sqrt(bp.reach2));
+              pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (std::sqrt(d2) - std::sqrt(bp.reach2));
             } else {
-              // in front of a face by more than 2 tol: outside the block. (The test below, with
-              // the normals computed again, uses tol: the margin keeps every pair it would find
-              // inside whatever the two computations' rounding; the aligned stack of
-              // test_contact.cpp, corners exactly on corners, lost contacts without it.)
-              for (int k = 0; k < bp.nf && near; ++k) near = dot(x - bp.a0[k], bp.n[k]) <= 2 * bp.tol;
+              // in front of a face by more than tol: outside the block (the narrow phase's own
+              // test, on the same planes, to the same bits)
+              for (int k = 0; k < bp.nf && near; ++k) near = dot(x - bp.a0[k], bp.n[k]) <= bp.tol;
               if (!near && bp.rho <= kContactRhoCap * bp.tol) {  // (else the block wakes its pairs anyway)
                 double h = -std::numeric_limits<double>::infinity();  // (how far in front)
                 for (int k = 0; k < bp.nf; ++k) h = std::max(h, dot(x - bp.a0[k], bp.n[k]));
-                cs.pair_wake[p] = cs.node_drift[n] + kSleepRate * cs.cb_drift[2 * j] +
-                                  (h - (2 * kContactRhoCap + 1) * bp.tol);
+                pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (h - (kContactRhoCap + 1) * bp.tol);
               }
             }
-            if (!near && cs.pair_g0[p] != 0) cs.pair_g0[p] = 0;  // outside: no ignored depth (d0)
+            if (!near && g0[p] != 0) g0[p] = 0;  // outside: no ignored depth (d0)
           }
         }
-        const double slack = near ? -1.0 : cs.pair_wake[p] - (cs.node_drift[n] + kSleepRate * cs.cb_drift[2 * j + 1]);
-        cs.pair_gwake[p] = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
-        wake = std::min(wake, cs.pair_gwake[p]);
-        cs.pair_near[p] = near;
+        const double slack = near ? -1.0 : pwake[p] - (drift[n] + kSleepRate * cbd[2 * j + 1]);
+        gwake[p] = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
+        wake = std::min(wake, gwake[p]);
+        pnear[p] = near;
         count += near;
       }
-      cs.grp_wake[gr] = wake;
+      grp_wake[gr] = wake;
     }
     cs.near_count[t + 1] = count;
 #pragma omp atomic
@@ -387,11 +394,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       for (std::int64_t k = 0; k < nt; ++k) cs.near_count[k + 1] += cs.near_count[k];
       cs.near.resize(static_cast<std::size_t>(cs.near_count[nt]));  // within its capacity
     }
+    std::int32_t* const out = cs.near.data();
     std::int64_t o = cs.near_count[t];
     for (std::int64_t gr = glo; gr < ghi; ++gr)
-      if (cs.grp_awake[gr])
-        for (std::int64_t p = cs.grp_start[gr]; p < cs.grp_start[gr + 1]; ++p)
-          if (cs.pair_near[p]) cs.near[o++] = static_cast<std::int32_t>(p);
+      if (awake[gr])
+        for (std::int64_t p = gstart[gr]; p < gstart[gr + 1]; ++p)
+          if (pnear[p]) out[o++] = static_cast<std::int32_t>(p);
   }
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair

@@ -205,7 +205,7 @@ struct ContactSet {
 
 // The tolerance reach of a simplex block (Tet4, Tri3) with nodes x, face planes (a0, outward unit
 // n) and tolerance tol: how far a point behind every face plane offset by tol can be from the
-// block (by 2 tol: twice as far); +inf for a quad (its offset faces need not keep to a scaled copy), an inverted or a flat
+// block; +inf for a quad (its offset faces need not keep to a scaled copy), an inverted or a flat
 // block. Pairs far from a block sleep only while every block they may meet stays within
 // kContactRhoCap tol (3 for a regular tetrahedron, 4-10 for most of a Gmsh mesh's; none of the
 // late SPEC 5.3 cylinder's over 20): contact.cpp, contact_edges.cpp.

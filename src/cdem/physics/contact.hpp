@@ -13,7 +13,9 @@
 //
 // Each step, a pair that held no contact and whose node is outside the block's bounding sphere or
 // in front of one of its face planes (both computed once per block) is skipped: only the pairs
-// that pass ("near") go through the narrow phase, the resolution and the gathers.
+// that pass ("near") go through the narrow phase, the resolution and the gathers. A pair found
+// apart is not even tested again until its nodes could have moved far enough to touch (the sleep,
+// contact.cpp; the block pairs of the edge contacts likewise, contact_edges.cpp).
 //
 // Narrow phase, node against block (its candidate faces: triangles in 3D, edges in 2D). With
 // g_k = (x - p_k) . n_k the node's signed distance to the plane of face k (outward unit normal

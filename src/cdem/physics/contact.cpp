@@ -135,7 +135,7 @@ constexpr double kSleepRate = 3.5;
 // contact.hpp). So with rho <= kContactRhoCap tol, the pair cannot pass before dD_n + dD_b
 // reaches h - (kContactRhoCap + 1) tol (one tol more for rounding), which the wake bound above
 // implies (dD_b <= kSleepRate dD_b). A block whose rho exceeds the cap this step (a
-// sliver, an inverted or a flat block, a quad) has all its pairs, and their nodes, tested.
+// sliver, an inverted or a flat block, a quad) has all its pairs tested.
 
 // A pair is not in contact once the node's projection is this far outside its contact face, in
 // barycentric coordinates (half the face: a node at a face's corner, or just past it, still is).
@@ -289,7 +289,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
     bp.rho = simplex_tolerance_reach(m.block_type[b], &m.x[n0], bp.a0, bp.n, bp.tol);
   }
-  // (a block whose tolerance reach exceeds the cap wakes all its pairs and their nodes this step;
+  // (a block whose tolerance reach exceeds the cap wakes all its pairs this step;
   // rare: a sliver, a block crushed flat or inverted)
   int over_cap = 0;
 #pragma omp parallel for schedule(static) reduction(| : over_cap)
@@ -302,10 +302,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     for (std::int64_t j = 0; j < ncb; ++j)
       if (cs.cb_drift[2 * j + 1] == std::numeric_limits<double>::infinity())
         for (auto i = cs.cb_pair_start[j]; i < cs.cb_pair_start[j + 1]; ++i) {
-          const std::int32_t p = cs.cb_pair[i];
-          cs.pair_gwake[p] = -1.0;
-          const auto gr = std::upper_bound(cs.grp_start.begin(), cs.grp_start.end(), p) - cs.grp_start.begin() - 1;
-          cs.grp_wake[gr] = -1.0;
+          cs.pair_gwake[cs.cb_pair[i]] = -1.0;
         }
   // The near list: each thread flags and counts a contiguous range of pairs, then writes its
   // near pairs at its offset, so the list is in pair order for any thread count. (The counts are
@@ -316,73 +313,59 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // A pair asleep by the test above with slack S (its wake bound less D_n + kSleepRate max_i D_i
   // now) cannot wake before drift_all has grown by S / (1 + kSleepRate): each node's path length
   // grows by at most drift_all's increment. So it is not looked at until then (one load instead of
-  // the node's and the block's drift bounds), and a node whose pairs all sleep is not looked at
-  // until the first of them may wake. A near pair and its node are looked at every step. (0.999:
-  // the path lengths are sums rounded differently.)
+  // the node's and the block's drift bounds). A near pair is looked at every step. (0.999: the
+  // path lengths are sums rounded differently.)
   const double drift_all = cs.drift_all;
   const bool sleep = cs.cfg.sleep;
-  const auto ngrp = static_cast<std::int64_t>(cs.grp_wake.size());
   // (the arrays through local pointers: a store to a byte array may alias anything, and the
   // compiler reloaded every vector's data pointer after each)
   const std::int8_t* const kf_ = cs.pair_kf.data();
-  const std::int32_t *const node_ = cs.pair_node.data(), *const cb_ = cs.pair_cb.data(),
-                     *const gstart = cs.grp_start.data();
+  const std::int32_t *const node_ = cs.pair_node.data(), *const cb_ = cs.pair_cb.data();
   const double *const drift = cs.node_drift.data(), *const cbd = cs.cb_drift.data();
   const BlockPlanes* const geom = cs.cb_geom.data();
-  double *const gwake = cs.pair_gwake.data(), *const pwake = cs.pair_wake.data(),
-         *const g0 = cs.pair_g0.data(), *const grp_wake = cs.grp_wake.data();
-  std::uint8_t *const pnear = cs.pair_near.data(), *const awake = cs.grp_awake.data();
+  double *const gwake = cs.pair_gwake.data(), *const pwake = cs.pair_wake.data(), *const g0 = cs.pair_g0.data();
+  std::uint8_t* const pnear = cs.pair_near.data();
   const Vec3* const x_ = m.x.data();
 #pragma omp parallel
   {
     const auto t = static_cast<std::int64_t>(omp_get_thread_num());
     const auto nt = static_cast<std::int64_t>(omp_get_num_threads());
-    const std::int64_t glo = ngrp * t / nt, ghi = ngrp * (t + 1) / nt;
+    const std::int64_t lo = npair * t / nt, hi = npair * (t + 1) / nt;
     std::int64_t count = 0, tests = 0;
-    for (std::int64_t gr = glo; gr < ghi; ++gr) {
-      awake[gr] = !(sleep && drift_all < grp_wake[gr]);
-      if (!awake[gr]) continue;
-      double wake = std::numeric_limits<double>::infinity();
-      for (std::int64_t p = gstart[gr]; p < gstart[gr + 1]; ++p) {
-        bool near = kf_[p] >= 0;
-        if (!near && sleep && drift_all < gwake[p]) {  // (most pairs: asleep on drift_all)
-          wake = std::min(wake, gwake[p]);
-          pnear[p] = 0;
-          continue;
-        }
-        const std::int32_t n = node_[p], j = cb_[p];
-        // (a pair found outside the sphere by delta sleeps until the drift bound has grown by
-        // delta: it cannot have come near before, and it would only be found outside again)
+    for (std::int64_t p = lo; p < hi; ++p) {
+      bool near = kf_[p] >= 0;
+      if (!near && sleep && drift_all < gwake[p]) {  // (most pairs: asleep on drift_all)
+        pnear[p] = 0;
+        continue;
+      }
+      const std::int32_t n = node_[p], j = cb_[p];
+      // (a pair found outside the sphere by delta sleeps until the drift bound has grown by
+      // delta: it cannot have come near before, and it would only be found outside again)
+      if (!near && (!sleep || drift[n] + kSleepRate * cbd[2 * j + 1] >= pwake[p])) {
+        ++tests;
+        const BlockPlanes& bp = geom[j];
+        const Vec3 x = x_[n];
+        const Vec3 dx = x - bp.c;
+        const double d2 = dot(dx, dx);
+        near = !(d2 > bp.reach2);
         if (!near) {
-          if (!sleep || drift[n] + kSleepRate * cbd[2 * j + 1] >= pwake[p]) {
-            ++tests;
-            const BlockPlanes& bp = geom[j];
-            const Vec3 x = x_[n];
-            const Vec3 dx = x - bp.c;
-            const double d2 = dot(dx, dx);
-            near = !(d2 > bp.reach2);
-            if (!near) {
-              pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (std::sqrt(d2) - std::sqrt(bp.reach2));
-            } else {
-              // in front of a face by more than tol: outside the block (the narrow phase's own
-              // test, on the same planes, to the same bits)
-              for (int k = 0; k < bp.nf && near; ++k) near = dot(x - bp.a0[k], bp.n[k]) <= bp.tol;
-              if (!near && bp.rho <= kContactRhoCap * bp.tol) {  // (else the block wakes its pairs anyway)
-                double h = -std::numeric_limits<double>::infinity();  // (how far in front)
-                for (int k = 0; k < bp.nf; ++k) h = std::max(h, dot(x - bp.a0[k], bp.n[k]));
-                pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (h - (kContactRhoCap + 1) * bp.tol);
-              }
-            }
-            if (!near && g0[p] != 0) g0[p] = 0;  // outside: no ignored depth (d0)
+          pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (std::sqrt(d2) - std::sqrt(bp.reach2));
+        } else {
+          // in front of a face by more than tol: outside the block (the narrow phase's own test,
+          // on the same planes, to the same bits)
+          for (int k = 0; k < bp.nf && near; ++k) near = dot(x - bp.a0[k], bp.n[k]) <= bp.tol;
+          if (!near && bp.rho <= kContactRhoCap * bp.tol) {  // (else the block wakes its pairs anyway)
+            double h = -std::numeric_limits<double>::infinity();  // (how far in front)
+            for (int k = 0; k < bp.nf; ++k) h = std::max(h, dot(x - bp.a0[k], bp.n[k]));
+            pwake[p] = drift[n] + kSleepRate * cbd[2 * j] + (h - (kContactRhoCap + 1) * bp.tol);
           }
         }
-        const double slack = near ? -1.0 : pwake[p] - (drift[n] + kSleepRate * cbd[2 * j + 1]);
-        gwake[p] = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
-        wake = std::min(wake, gwake[p]);
-        pnear[p] = near;
-        count += near;
+        if (!near && g0[p] != 0) g0[p] = 0;  // outside: no ignored depth (d0)
       }
-      grp_wake[gr] = wake;
+      const double slack = near ? -1.0 : pwake[p] - (drift[n] + kSleepRate * cbd[2 * j + 1]);
+      gwake[p] = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
+      pnear[p] = near;
+      count += near;
     }
     cs.near_count[t + 1] = count;
 #pragma omp atomic
@@ -396,10 +379,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
     std::int32_t* const out = cs.near.data();
     std::int64_t o = cs.near_count[t];
-    for (std::int64_t gr = glo; gr < ghi; ++gr)
-      if (awake[gr])
-        for (std::int64_t p = gstart[gr]; p < gstart[gr + 1]; ++p)
-          if (pnear[p]) out[o++] = static_cast<std::int32_t>(p);
+    for (std::int64_t p = lo; p < hi; ++p)
+      if (pnear[p]) out[o++] = static_cast<std::int32_t>(p);
   }
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair
@@ -717,8 +698,8 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_block, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
-           cs.near, cs.near_group, cs.pair_near, cs.pair_off, cs.pair_wake, cs.node_drift, cs.grp_start,
-           cs.pair_gwake, cs.grp_wake, cs.grp_awake, cs.cb_pair_start, cs.cb_pair,
+           cs.near, cs.near_group, cs.pair_near, cs.pair_off, cs.pair_wake, cs.node_drift,
+           cs.pair_gwake, cs.cb_pair_start, cs.cb_pair,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
            cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand) +
          b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.eb_block, cs.bp_ia, cs.bp_ib,

@@ -139,17 +139,11 @@ struct ContactSet {
   // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
   // at which it is tested again
   std::vector<double> pair_wake, node_drift, cb_drift;
-  // and pairs and whole nodes sleep on one number: drift_all is the sum over the steps since the
-  // build of the largest |v| dt of any node (no node's path length grew by more); per node with
-  // pairs (grp, in pair order) the start of its pairs (+ the end), the drift_all at which it is looked at again, and
-  // whether it was this step
+  // and pairs sleep on one number: drift_all is the sum over the steps since the build of the
+  // largest |v| dt of any node (no node's path length grew by more)
   double drift_all = 0;
   std::vector<double> pair_gwake;  // per pair: the drift_all before which it is not tested again
-  std::vector<std::int32_t> grp_start;
-  std::vector<double> grp_wake;
-  std::vector<std::uint8_t> grp_awake;
-  // per candidate block, its pairs (CSR): woken, with their nodes, when the block's tolerance
-  // reach is over the cap
+  // per candidate block, its pairs (CSR): woken when the block's tolerance reach is over the cap
   std::vector<std::int32_t> cb_pair_start, cb_pair;
   std::vector<std::int64_t> near_count;
   // face-side gather: per node its slot in the step's sums (-1 none), the nodes touched, and

@@ -306,12 +306,6 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.node_drift.assign(m.n_nodes(), 0.0);
   cs.drift_all = 0;
   cs.pair_gwake.assign(npair, 0.0);
-  cs.grp_start.clear();  // (the pairs are sorted by node)
-  for (std::size_t p = 0; p < npair; ++p)
-    if (p == 0 || cs.pair_node[p] != cs.pair_node[p - 1]) cs.grp_start.push_back(static_cast<std::int32_t>(p));
-  cs.grp_start.push_back(static_cast<std::int32_t>(npair));
-  cs.grp_wake.assign(cs.grp_start.size() - 1, 0.0);  // every node looked at in the next step
-  cs.grp_awake.assign(cs.grp_start.size() - 1, 0);
   cs.cb_pair_start.assign(cs.cblock.size() + 1, 0);
   for (std::size_t p = 0; p < npair; ++p) ++cs.cb_pair_start[cs.pair_cb[p] + 1];
   for (std::size_t j = 0; j < cs.cblock.size(); ++j) cs.cb_pair_start[j + 1] += cs.cb_pair_start[j];

@@ -282,26 +282,32 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       q = e;
     }
   }
-  // (0) per block its bounding sphere, drift bounds (node_drift: the path length of each node
-  // since the build, contact.cpp) and tolerance reach: the node pairs' of this step when the block
-  // is one of theirs (cb_geom), else from its geometry, computed here (eb_need 2: it has it)
+  // (0) per block its bounding sphere and drift bounds (node_drift: the path length of each node
+  // since the build; the largest +inf when its tolerance reach is over the cap): those of the
+  // node pairs' step when the block is one of theirs (cb_drift, contact.cpp), else from its
+  // geometry, computed here (eb_need 2: it has it)
   const auto neb = static_cast<std::int64_t>(cs.eb_block.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i) {
     const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
     tet_sphere(m, b, cs.eb_c[i], cs.eb_r[i]);
+    const std::int32_t slot = cs.block_slot[b];
+    cs.eb_need[i] = slot < 0 ? 2 : 0;
+    if (slot >= 0) {
+      cs.eb_drift[2 * i] = cs.cb_drift[2 * slot];
+      cs.eb_drift[2 * i + 1] = cs.cb_drift[2 * slot + 1];
+      continue;
+    }
+    tet_geom(m, cs, b, cs.eb_geom[i]);
     double dmin = cs.node_drift[n0], dmax = dmin;
     for (int k = 1; k < 4; ++k) {
       dmin = std::min(dmin, cs.node_drift[n0 + k]);
       dmax = std::max(dmax, cs.node_drift[n0 + k]);
     }
-    const std::int32_t slot = cs.block_slot[b];
-    cs.eb_need[i] = slot < 0 ? 2 : 0;
-    if (slot < 0) tet_geom(m, cs, b, cs.eb_geom[i]);
-    const BlockPlanes* bp = slot >= 0 ? &cs.cb_geom[slot] : nullptr;
-    const double rho = bp ? bp->rho : cs.eb_geom[i].rho, tol = bp ? bp->tol : cs.eb_geom[i].tol;
     cs.eb_drift[2 * i] = dmin;
-    cs.eb_drift[2 * i + 1] = rho <= kContactRhoCap * tol ? dmax : std::numeric_limits<double>::infinity();
+    cs.eb_drift[2 * i + 1] = cs.eb_geom[i].rho <= kContactRhoCap * cs.eb_geom[i].tol
+                                 ? dmax
+                                 : std::numeric_limits<double>::infinity();
   }
   // the pairs awake this step (below) need their blocks' geometry: each computed once
   const bool sleep = cs.cfg.sleep;
@@ -328,7 +334,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   //   least delta - dD_a - dD_b apart later. An edge contact needs a point of a's edge within
   //   tol of b's every face plane (and the other way round): within b's tolerance reach of b,
   //   at most kContactRhoCap tol_b while b's drift bound is finite (and a block is behind its own
-//   face planes only while it is not inverted: both reaches within the cap when tested).
+  //   face planes only while it is not inverted: both reaches within the cap when tested).
   // So the pair is not tested again before dD_a + dD_b reaches delta / 3, or delta -
   // (kContactRhoCap + 1) max(tol_a, tol_b) (one tol for rounding): no contact is missed, the
   // results are the same bit for bit. Pairs that held contacts are tested every step.

@@ -482,6 +482,7 @@ double make_charge_cavities(Model& m, BarCharges& bc) {
       m.block_materials.push_back(mat);
       m.mat_lambda.push_back(lam_c);
       m.mat_shear.push_back(G_c);
+      m.mat_beta.push_back(mat.stiffness_damping);
       m.block_material[b] = static_cast<std::int32_t>(m.block_materials.size() - 1);
       for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
         m.mass[n] *= rho_c / rho;

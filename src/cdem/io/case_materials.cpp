@@ -54,7 +54,7 @@ void parse_materials(const TomlTable& top, Case& c) {
                                  c.path));
   for (const auto& t : mats) {
     t.check_known({"name", "regions", "density", "youngs_modulus", "poisson_ratio", "damping",
-                   "local_damping", "explosive"});
+                   "local_damping", "stiffness_damping", "explosive"});
     BlockMaterial m;
     m.name = t.string("name");
     m.regions = t.strings("regions");
@@ -74,6 +74,11 @@ void parse_materials(const TomlTable& top, Case& c) {
     m.local_damping = t.non_negative("local_damping", 0.0);
     if (m.local_damping >= 1.0)
       throw InputError(fmt::format("{}: expected a value in [0, 1)", t.where("local_damping")));
+    m.stiffness_damping = t.non_negative("stiffness_damping", 0.0);
+    if (m.stiffness_damping > 1e-3)
+      throw InputError(fmt::format("{}: expected a Rayleigh beta in [0, 1e-3] s (a small "
+                                   "fraction of the undamped time step, docs/theory.md), got {}",
+                                   t.where("stiffness_damping"), m.stiffness_damping));
     for (const auto& o : c.materials)
       if (o.name == m.name) throw InputError(fmt::format("{}: duplicate material name '{}'", t.where("name"), m.name));
     c.materials.push_back(m);

@@ -84,6 +84,8 @@ std::string resolved_case_toml(const Case& c) {
     o += fmt::format("]\ndensity = {:.17g}\nyoungs_modulus = {:.17g}\npoisson_ratio = {:.17g}\n"
                      "damping = {:.17g}\nlocal_damping = {:.17g}\n",
                      m.density, m.youngs, m.poisson, m.damping, m.local_damping);
+    // (only when set: checkpoints of cases resolved before the key existed still match)
+    if (m.stiffness_damping > 0) o += fmt::format("stiffness_damping = {:.17g}\n", m.stiffness_damping);
     if (!m.explosive.empty()) o += fmt::format("explosive = {}\n", q(m.explosive));
   }
   for (const auto& im : c.interfaces) {

@@ -71,6 +71,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   for (const auto& bm : block_materials) {
     m.mat_lambda.push_back(bm.lambda());
     m.mat_shear.push_back(bm.shear());
+    m.mat_beta.push_back(bm.stiffness_damping);
   }
 
   // ---- region -> block material ----

@@ -15,6 +15,7 @@ struct BlockMaterial {
   double poisson = 0;        // -
   double damping = 0;        // mass-proportional viscous damping mu_d / m (1/s), eq. (3)
   double local_damping = 0;  // non-viscous local damping alpha_L (-), 0..1
+  double stiffness_damping = 0;  // Rayleigh beta (s): viscous stress beta C:E' (physics/stiffness_damping.hpp)
   std::string explosive;     // non-empty: the region is a solid charge of this explosive
   // Bar charges (make_charge_cavities): the share of the block that is charge, min(1, phi),
   // and whether the block counts as charge (phi >= 0.5: glued to its neighbours, left out of

@@ -150,6 +150,7 @@ struct Model {
   std::vector<InterfaceMaterial> iface_materials;
   std::vector<SpringLaw> spring_laws;          // parallel to iface_materials
   std::vector<double> mat_lambda, mat_shear;   // Lame constants per block material (Pa)
+  std::vector<double> mat_beta;                // stiffness-proportional damping per material (s)
   double release_distance_factor = 0.5;        // broken pair released beyond this x block size
 
   // ---- regions and boundary facets (from the mesh) ----

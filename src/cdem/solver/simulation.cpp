@@ -11,6 +11,7 @@
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
+#include "cdem/physics/stiffness_damping.hpp"
 #include "cdem/physics/tie_failure.hpp"
 #include "cdem/physics/ties.hpp"
 #include "cdem/solver/run_state.hpp"
@@ -54,6 +55,13 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     stable_ = stable_time_step(m_, c.dt_safety, c.contact.enabled);
   }
   contact_ = setup_contact(m_, c.contact, c.opened_stiffness, m_.tied ? omega2_max_ : 0.0);
+  beta_max_ = max_stiffness_damping(m_);
+  if (beta_max_ > 0) {
+    stable_.dt = stable_.safety * damped_stable_step(stable_.dt / stable_.safety, beta_max_);
+    stable_.limit += " with stiffness damping";
+    sd_force_.assign(m_.n_nodes(), Vec3{});
+    sd_power_.assign(m_.n_blocks(), 0.0);
+  }
   fixed_dt_ = c.fixed_dt;
   case_path_ = c.path;
   dt_ = stable_.dt;
@@ -89,6 +97,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
 
 void Simulation::limit_dt(double dt_max, const std::string& what) {
   if (!(dt_max > 0) || !std::isfinite(dt_max)) return;
+  dt_max = damped_stable_step(dt_max, beta_max_);
   if (fixed_dt_ > 0) {
     if (fixed_dt_ > dt_max)
       throw InputError(fmt::format("{}: key 'simulation.dt': {} s is above the stable step {:.4g} s "
@@ -100,7 +109,7 @@ void Simulation::limit_dt(double dt_max, const std::string& what) {
   if (safety * dt_max < dt_) {
     dt_ = safety * dt_max;
     stable_.dt = dt_;
-    stable_.limit = what;
+    stable_.limit = beta_max_ > 0 ? what + " with stiffness damping" : what;
   }
 }
 
@@ -239,6 +248,8 @@ void Simulation::step(bool sample) {
   }
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
+  // 3b. stiffness-proportional damping of the blocks (when a material has it)
+  if (beta_max_ > 0) stiffness_damping_forces(m_, sd_force_, sd_power_);
   lap(kStepBlocks);
   // 4. general contact between fragments, released faces and boundary faces
   contact_forces(m_, contact_, dt_);
@@ -281,6 +292,13 @@ void Simulation::step(bool sample) {
     const Vec3 v1 = m_.v[applied_.node[i]];
     step_explosive += dot(applied_.force[i], 0.5 * (applied_.v_old[i] + v1)) * dt_;
     last_explosive_ += 0.5 * dt_ * dot(applied_.force[i], v1);
+  }
+  if (beta_max_ > 0) {  // serial sums in a fixed order: the same for any thread count
+    double at_old = 0, at_new = 0;
+    for (double p : sd_power_) at_old += p;
+    for (std::size_t n = 0; n < sd_force_.size(); ++n) at_new += dot(sd_force_[n], m_.v[n]);
+    w_sdamp_ += 0.5 * dt_ * (at_old + at_new);
+    last_sdamp_ = 0.5 * dt_ * at_new;
   }
   double step_absorbed = 0, load_after = 0;
   step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
@@ -336,6 +354,7 @@ EnergyBalance Simulation::energy() const {
   if (steps_ > 0)
     for (double ck : (m_.tied ? vtx_cke_ : cke_)) last_damping += ck;
   e.damping += w_absorbed_ - last_absorbed_ - last_damping;
+  e.damping -= w_sdamp_ - last_sdamp_;  // the damping forces' work is negative
   e.external_work = w_boundary_ - last_boundary_;
   e.explosive_work = w_explosive_ - last_explosive_;
   e.initial = e_initial_;
@@ -380,6 +399,10 @@ void Simulation::io_state(StateArchive& ar) {
   ar.io("sim.last_boundary", last_boundary_);
   ar.io("sim.last_absorbed", last_absorbed_);
   ar.io("sim.last_explosive", last_explosive_);
+  if (beta_max_ > 0) {  // (only then: checkpoints of undamped runs keep their records)
+    ar.io("sim.w_sdamp", w_sdamp_);
+    ar.io("sim.last_sdamp", last_sdamp_);
+  }
   ar.io("sim.bc_v_old", bc_.v_old);
   ar.io("sim.bc_load_force", bc_.load_force);
   ar.io("sim.applied_node", applied_.node);

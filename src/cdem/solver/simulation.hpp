@@ -151,6 +151,12 @@ class Simulation {
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
   // The parts after t_n of the last step's works, F(n) . v(n+1/2) dt / 2 (energy())
   double last_boundary_ = 0, last_absorbed_ = 0, last_explosive_ = 0;
+  // Stiffness-proportional damping (physics/stiffness_damping.hpp), when some material has it:
+  // the step's damping force per node and power per block at v(n-1/2), the accumulated work
+  // (<= 0) and its part after t_n; beta_max_ (s) enters the stable step.
+  std::vector<Vec3> sd_force_;
+  std::vector<double> sd_power_;
+  double w_sdamp_ = 0, last_sdamp_ = 0, beta_max_ = 0;
 };
 
 }  // namespace cdem

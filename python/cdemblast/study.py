@@ -777,6 +777,41 @@ def plot_vertical(variants, times, out_dir, written, notes):
     return names
 
 
+def plot_damage(variants, times, out_dir, written, notes):
+    """Damage (the broken share of each block's interface area) and the cracks at the chosen
+    times: damage.png, rows the variants, columns the times (3D: the vertical section)."""
+    rows = [(v, load_frames(v.run, choose_times(v.run, times), 1.0, notes)) for v in variants]
+    rows = [(v, frames) for v, frames in rows if frames]
+    if not rows:
+        return None
+    f0 = rows[0][1][0]
+    v0 = f0.view()
+    aspect = plots.box_aspect(plots.view_box([v0.polys], f0, v0.idx))
+    nr, nc = len(rows), max(len(frames) for _, frames in rows)
+    w, h = plots.figsize_for(nc, nr, aspect, 3.4, False, True, 2)
+    fig, axes = plt.subplots(nr, nc, squeeze=False, constrained_layout=True,
+                             figsize=(max(w, 7.5), h))
+    m = None
+    for r, (v, frames) in enumerate(rows):
+        for c in range(nc):
+            ax = axes[r, c]
+            if c >= len(frames):
+                ax.set_visible(False)
+                continue
+            f = frames[c]
+            charge = (v.setup.charge_cell if v.setup is not None and v.setup.measures is not None
+                      and v.setup.charge_cell.size == f.grid.ncells else None)
+            got = plots.plot_damage_final(v.run, f, out_dir, None, written, ax=ax, fig=fig,
+                                          charge=charge)
+            m = m if m is not None else got
+            ax.set_title(f"{v.label}, {plots.fmt_time(f.time)}", fontsize=9)
+    if m is not None:
+        cb = plots.colorbar(fig, m, ax=axes.ravel().tolist(), shrink=0.8)
+        cb.set_label("damage (broken fraction of interface area)")
+    fig.suptitle("Damage at the chosen output times (rows: variants); black lines: cracks")
+    return save(fig, out_dir, "damage.png", written)
+
+
 def plot_monitor_vertical(variants, out_dir, written):
     """Displacement along up at each monitor, the variants overlaid."""
     runs = [v.run for v in variants if v.run.monitors]
@@ -916,6 +951,8 @@ CAPTIONS = {
                                      "surface seen from above), one colour scale for all panels.",
     "vertical_displacement_section.png": "Displacement along `up` in the vertical section through "
                                          "the model centre, one colour scale for all panels.",
+    "damage.png": "Damage (broken share of each block's interface area) and cracks at the chosen "
+                  "output times (rows: variants; 3D: the vertical section).",
     "monitors.png": "Monitor histories (von Mises stress, dominant velocity and displacement "
                     "components), line style per variant.",
     "monitors_vertical.png": "Displacement along `up` at each monitor, the variants overlaid.",
@@ -1109,6 +1146,7 @@ def compare(study, variants=None, pictures=True, log=print):
         times = study.compare.get("times", [])
         failures.run("vertical displacement", notes, plot_vertical, variants, times, out_dir,
                      written, notes)
+        failures.run("damage.png", notes, plot_damage, variants, times, out_dir, written, notes)
         failures.run("monitors.png", notes, plot_monitors, runs, out_dir, written)
         failures.run("monitors_vertical.png", notes, plot_monitor_vertical, variants, out_dir,
                      written)

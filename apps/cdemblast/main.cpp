@@ -20,6 +20,7 @@
 #include "cdem/explosive/charges.hpp"
 #include "cdem/analysis/monitors.hpp"
 #include "cdem/io/case.hpp"
+#include "cdem/parallel/partition.hpp"
 #include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
 #include "cdem/physics/ties.hpp"
@@ -27,7 +28,23 @@
 
 namespace {
 
-int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
+// check --parts N: the METIS partition of the model into N parts and what a distributed run
+// would exchange with it (docs/parallel.md).
+void print_partition(const cdem::PreparedCase& pc, int parts) {
+  const auto& m = pc.sim.model();
+  const auto groups = cdem::charge_groups(m.n_blocks(), pc.bars, pc.solids);
+  const cdem::BlockGraph g = cdem::block_graph(m, groups);
+  const auto part = cdem::partition_kway(g, parts);
+  const auto q = cdem::partition_quality(g, part, parts, groups);
+  fmt::print("partition   {} parts (METIS k-way): {} to {} blocks, load imbalance {:.3f}, {} interfaces "
+             "cut ({:.2f} %), ghost blocks {:.0f} (mean) / {} (max) per part, {:.1f} / {} neighbours, "
+             "{:.3g} / {:.3g} kB exchanged per part per step; {} of the charges split\n",
+             parts, q.blocks_min, q.blocks_max, q.imbalance, q.edge_cut, 100 * q.edge_cut_share,
+             q.ghosts_mean, q.ghosts_max, q.neighbours_mean, q.neighbours_max, q.bytes_mean / 1e3,
+             q.bytes_max / 1e3, q.together_split);
+}
+
+int cmd_check(const std::string& path, const std::vector<std::string>& sets, int parts) {
   const cdem::Case c = cdem::load_case(path, sets);
   const cdem::Mesh mesh = cdem::load_mesh(c);
   const cdem::PreparedCase pc = cdem::prepare_case(c, mesh);
@@ -84,6 +101,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets) {
   for (const auto& ch : solids.charges)
     fmt::print("solid       hole '{}' deck {}\n", ch.hole, ch.deck + 1);
   if (!solids.empty()) fmt::print("explosive   {} blocks\n", solids.block.size());
+  if (parts > 0) print_partition(pc, parts);
   fmt::print("steps       {:.0f} to reach {} s{}\n", pc.size.steps, c.end_time,
              c.max_steps > 0 && pc.size.steps < std::ceil(c.end_time / sim.dt() - 1e-9)
                  ? " (stopped earlier by simulation.max_steps)"
@@ -192,6 +210,11 @@ int main(int argc, char** argv) {
   auto* check = app.add_subcommand("check", "Validate a case, mesh it, print the model size and dt");
   check->add_option("case", case_path, "Case file (TOML)")->required();
   check->add_option("--set", sets, "Override a case key")->allow_extra_args(false);
+  int check_parts = 0;
+  check->add_option("--parts", check_parts,
+                    "Also partition the model into this many parts with METIS and print the "
+                    "partition's quality (docs/parallel.md)")
+      ->check(CLI::Range(1, 1 << 20));
 
   std::vector<std::string> report_runs;
   std::string report_out;
@@ -248,6 +271,19 @@ int main(int argc, char** argv) {
                     "With --case: untimed steps before the timed ones (default 0)")
       ->check(CLI::Range(static_cast<std::int64_t>(0), static_cast<std::int64_t>(100000000)));
 
+  bench->add_option("--partition", bench_opt.partition_parts,
+                    "Scale projection instead of timing: partition the box (METIS) into these "
+                    "part counts, e.g. 16,64,256,1024, and project the exchange (docs/parallel.md)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1 << 20));
+  bench->add_option("--partition-blocks", bench_opt.partition_blocks,
+                    "With --partition: box sizes, e.g. 1000000,10000000 (default: --blocks)")
+      ->delimiter(',')
+      ->check(CLI::Range(static_cast<std::int64_t>(6), static_cast<std::int64_t>(2000000000)));
+  bench->add_option("--step-ns", bench_opt.step_ns,
+                    "With --partition: ns per block-step on one core (default: measured on the 30k box)")
+      ->check(CLI::Range(0.0, 1e9));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -259,7 +295,7 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("cdemblast"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   try {
-    if (*check) return cmd_check(case_path, sets);
+    if (*check) return cmd_check(case_path, sets, check_parts);
     if (*report) return cmd_report(report_runs, report_out);
     if (*study) return cmd_study(study_file, study_out, study_threads, study_no_run, study_sets, study_only,
                                    study_verbose, argv[0]);
@@ -277,6 +313,7 @@ int main(int argc, char** argv) {
                            "model; with --case set its keys with --set\n");
         return 2;
       }
+      if (!bench_opt.partition_parts.empty()) return cdem::run_partition_projection(bench_opt);
       return cdem::run_bench(bench_opt);
     }
     if (*resume) {

@@ -46,7 +46,17 @@ struct BenchOptions {
   std::vector<std::string> sets;
   std::string from_run;
   std::int64_t warmup_steps = 0;
+  // --partition: the scale projection (solver/bench_partition.cpp, docs/parallel.md) instead of
+  // the timing: the box at each of `partition_blocks` (default: `blocks`) set up as a mesh and
+  // its block graph only, partitioned by METIS into each of `partition_parts`; the cost per
+  // block-step on one core `step_ns` (0: measured on the 30k box first)
+  std::vector<int> partition_parts;
+  std::vector<std::int64_t> partition_blocks;
+  double step_ns = 0;
 };
+
+// The scale projection (--partition). Returns 0, or 1 without METIS.
+int run_partition_projection(const BenchOptions& opt);
 
 // Runs the benchmark and prints its report on stdout. Returns 0.
 int run_bench(const BenchOptions& opt);

@@ -1,0 +1,259 @@
+#include "cdem/parallel/partition.hpp"
+
+#include "cdem/explosive/charges.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+#ifdef CDEM_HAVE_METIS
+#include <metis.h>
+#endif
+
+namespace cdem {
+namespace {
+
+// Heavy edge between blocks bound to one charge: 1000 interfaces' worth.
+constexpr std::int32_t kTogetherWeight = 1000;
+
+// CSR from an edge list (both directions added), duplicates kept (there are none: one interface
+// per face).
+void fill_csr(BlockGraph& g, std::size_t n, const std::vector<std::array<std::int32_t, 3>>& edges) {
+  g.xadj.assign(n + 1, 0);
+  for (const auto& e : edges) ++g.xadj[e[0] + 1], ++g.xadj[e[1] + 1];
+  for (std::size_t i = 0; i < n; ++i) g.xadj[i + 1] += g.xadj[i];
+  g.adjncy.assign(g.xadj[n], 0);
+  g.adjwgt.assign(g.xadj[n], 0);
+  std::vector<std::int32_t> pos(g.xadj.begin(), g.xadj.end() - 1);
+  for (const auto& e : edges) {
+    g.adjncy[pos[e[0]]] = e[1], g.adjwgt[pos[e[0]]++] = e[2];
+    g.adjncy[pos[e[1]]] = e[0], g.adjwgt[pos[e[1]]++] = e[2];
+  }
+}
+
+}  // namespace
+
+std::int32_t block_weight(ElemType type, int interfaces) {
+  const int kernel = type == ElemType::Tet4 ? 10 : type == ElemType::Quad4 ? 8 : 4;
+  return kernel + interfaces;
+}
+
+BlockGraph block_graph(const Model& m, const std::vector<std::int32_t>& together) {
+  BlockGraph g;
+  const std::size_t n = m.n_blocks();
+  g.points_per_iface = m.springs_per_iface;
+  std::vector<std::array<std::int32_t, 3>> edges;
+  edges.reserve(m.n_ifaces());
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    const auto a = m.iface_block_a[i], b = m.iface_block_b[i];
+    const bool tie = !together.empty() && together[a] >= 0 && together[a] == together[b];
+    edges.push_back({a, b, tie ? kTogetherWeight : static_cast<std::int32_t>(m.springs_per_iface)});
+  }
+  fill_csr(g, n, edges);
+  g.vwgt.resize(n);
+  for (std::size_t b = 0; b < n; ++b) g.vwgt[b] = block_weight(m.block_type[b], g.xadj[b + 1] - g.xadj[b]);
+  g.nodes_per_block = m.dim == 3 ? 4 : (m.n_nodes() > 3 * n ? 4 : 3);
+  return g;
+}
+
+BlockGraph mesh_block_graph(const Mesh& mesh) {
+  BlockGraph g;
+  const std::size_t n = mesh.num_elements();
+  g.points_per_iface = mesh.dim == 3 ? 3 : 2;
+  // (sorted face vertices, element): sort, then equal neighbours are shared faces
+  struct Face {
+    std::int32_t v[3];
+    std::int32_t elem;
+  };
+  std::vector<Face> faces;
+  faces.reserve(4 * n);
+  std::size_t quads = 0;
+  for (std::size_t e = 0; e < n; ++e) {
+    const auto& ev = mesh.elem_vertices[e];
+    const auto el = static_cast<std::int32_t>(e);
+    switch (mesh.elem_type[e]) {
+      case ElemType::Tet4: {
+        static constexpr int f[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+        for (const auto& fi : f) {
+          Face x{{ev[fi[0]], ev[fi[1]], ev[fi[2]]}, el};
+          std::sort(x.v, x.v + 3);
+          faces.push_back(x);
+        }
+        break;
+      }
+      case ElemType::Tri3:
+      case ElemType::Quad4: {
+        const int k = mesh.elem_type[e] == ElemType::Quad4 ? 4 : 3;
+        quads += k == 4;
+        for (int i = 0; i < k; ++i) {
+          Face x{{std::min(ev[i], ev[(i + 1) % k]), std::max(ev[i], ev[(i + 1) % k]), -1}, el};
+          faces.push_back(x);
+        }
+        break;
+      }
+    }
+  }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return std::lexicographical_compare(a.v, a.v + 3, b.v, b.v + 3) ||
+           (std::equal(a.v, a.v + 3, b.v) && a.elem < b.elem);
+  });
+  std::vector<std::array<std::int32_t, 3>> edges;
+  edges.reserve(faces.size() / 2);
+  for (std::size_t i = 0; i + 1 < faces.size(); ++i)
+    if (std::equal(faces[i].v, faces[i].v + 3, faces[i + 1].v)) {
+      edges.push_back({faces[i].elem, faces[i + 1].elem, g.points_per_iface});
+      ++i;
+    }
+  std::vector<Face>().swap(faces);
+  fill_csr(g, n, edges);
+  g.vwgt.resize(n);
+  for (std::size_t e = 0; e < n; ++e) g.vwgt[e] = block_weight(mesh.elem_type[e], g.xadj[e + 1] - g.xadj[e]);
+  g.nodes_per_block = mesh.dim == 3 ? 4 : (2 * quads > n ? 4 : 3);
+  return g;
+}
+
+std::vector<std::int32_t> charge_groups(std::size_t n_blocks, const BarCharges& bars,
+                                        const SolidCharges& solids) {
+  std::vector<std::int32_t> g(n_blocks, -1);
+  for (std::size_t i = 0; i < bars.elem_block.size(); ++i)
+    if (bars.elem_bar_offset[i] < bars.elem_bar_offset[i + 1])
+      g[bars.elem_block[i]] = bars.elem_bar[bars.elem_bar_offset[i]];
+  const auto nb = static_cast<std::int32_t>(bars.bars.size());
+  for (std::size_t k = 0; k < solids.block.size(); ++k) g[solids.block[k]] = nb + solids.charge[k];
+  return g;
+}
+
+bool have_metis() {
+#ifdef CDEM_HAVE_METIS
+  return true;
+#else
+  return false;
+#endif
+}
+
+std::vector<std::int32_t> partition_kway(const BlockGraph& g, int parts, double ufactor) {
+  std::vector<std::int32_t> part(g.n(), 0);
+  if (parts <= 1 || g.n() == 0) return part;
+#ifdef CDEM_HAVE_METIS
+  static_assert(sizeof(idx_t) == sizeof(std::int32_t), "METIS built with 32-bit indices expected");
+  idx_t nv = static_cast<idx_t>(g.n()), ncon = 1, np = parts, objval = 0;
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_OBJTYPE] = METIS_OBJTYPE_CUT;
+  options[METIS_OPTION_UFACTOR] = static_cast<idx_t>(std::lround((ufactor - 1.0) * 1000));
+  options[METIS_OPTION_SEED] = 1;
+  options[METIS_OPTION_NUMBERING] = 0;
+  // METIS takes non-const pointers; it does not write the graph.
+  auto* xadj = const_cast<idx_t*>(g.xadj.data());
+  auto* adjncy = const_cast<idx_t*>(g.adjncy.data());
+  auto* vwgt = const_cast<idx_t*>(g.vwgt.data());
+  auto* adjwgt = const_cast<idx_t*>(g.adjwgt.data());
+  const int rc = METIS_PartGraphKway(&nv, &ncon, xadj, adjncy, vwgt, nullptr, adjwgt, &np, nullptr,
+                                     nullptr, options, &objval, part.data());
+  if (rc != METIS_OK)
+    throw std::runtime_error("METIS_PartGraphKway failed (code " + std::to_string(rc) + ")");
+  return part;
+#else
+  (void)ufactor;
+  throw std::runtime_error("this cdemblast was built without METIS (install libmetis-dev, rebuild)");
+#endif
+}
+
+PartitionQuality partition_quality(const BlockGraph& g, const std::vector<std::int32_t>& part, int parts,
+                                   const std::vector<std::int32_t>& together) {
+  PartitionQuality q;
+  q.parts = parts;
+  const std::size_t n = g.n();
+  std::vector<double> weight(parts, 0.0), state(parts, 0.0), forces(parts, 0.0);
+  std::vector<std::int64_t> blocks(parts, 0), ghosts(parts, 0);
+  std::vector<int> neighbours(parts, 0);
+  std::int64_t edges = 0;
+  // ghost blocks: counted once per (part, block) with a stamp per block
+  std::vector<std::int32_t> stamp(n, -1);
+  // neighbours: one stamp per (part, part)
+  std::vector<std::vector<std::int32_t>> seen(parts);
+  const double state_bytes = 6.0 * 8 * g.nodes_per_block;  // x and v of a ghost block's nodes
+  const double force_bytes = 3.0 * 8 * g.points_per_iface;  // an owned cut interface's forces
+  // order the blocks by part so that each part's ghosts are stamped in one pass
+  std::vector<std::int32_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) { return part[a] < part[b]; });
+  for (std::int32_t b : order) {
+    const int p = part[b];
+    weight[p] += g.vwgt.empty() ? 1.0 : g.vwgt[b];
+    ++blocks[p];
+    for (auto k = g.xadj[b]; k < g.xadj[b + 1]; ++k) {
+      const auto o = g.adjncy[k];
+      if (o > b) ++edges;
+      const int po = part[o];
+      if (po == p) continue;
+      if (o > b) ++q.edge_cut;
+      if (stamp[o] != p) {  // o is a ghost of p
+        stamp[o] = p;
+        ++ghosts[p];
+        state[p] += state_bytes;  // received
+      }
+      // a cut interface's owner (the part of its lower block) sends its forces, the other
+      // part receives them: force_bytes for either
+      forces[p] += force_bytes;
+      auto& s = seen[p];
+      if (std::find(s.begin(), s.end(), po) == s.end()) s.push_back(po);
+    }
+  }
+  double wsum = 0;
+  for (double w : weight) wsum += w;
+  const double wmean = wsum / parts;
+  q.imbalance = wmean > 0 ? *std::max_element(weight.begin(), weight.end()) / wmean : 1.0;
+  q.edge_cut_share = edges > 0 ? static_cast<double>(q.edge_cut) / edges : 0.0;
+  q.blocks_min = *std::min_element(blocks.begin(), blocks.end());
+  q.blocks_max = *std::max_element(blocks.begin(), blocks.end());
+  for (int p = 0; p < parts; ++p) {
+    neighbours[p] = static_cast<int>(seen[p].size());
+    // the ghost state is sent too: a part sends its own blocks that are ghosts elsewhere, about
+    // as many bytes as it receives (symmetric layers), so twice what it receives
+    const double bytes = 2 * state[p] + forces[p];
+    q.ghosts_max = std::max(q.ghosts_max, ghosts[p]);
+    q.ghosts_mean += static_cast<double>(ghosts[p]) / parts;
+    q.neighbours_max = std::max(q.neighbours_max, neighbours[p]);
+    q.neighbours_mean += static_cast<double>(neighbours[p]) / parts;
+    q.bytes_max = std::max(q.bytes_max, bytes);
+    q.bytes_mean += bytes / parts;
+    q.messages_max = std::max(q.messages_max, 4.0 * neighbours[p]);
+  }
+  if (!together.empty()) {
+    std::vector<std::int32_t> first_part;
+    std::vector<std::uint8_t> split;
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto t = together[b];
+      if (t < 0) continue;
+      if (static_cast<std::size_t>(t) >= first_part.size()) first_part.resize(t + 1, -1), split.resize(t + 1, 0);
+      if (first_part[t] < 0) first_part[t] = part[b];
+      else if (first_part[t] != part[b]) split[t] = 1;
+    }
+    for (auto s : split) q.together_split += s;
+  }
+  return q;
+}
+
+Projection project(const BlockGraph& g, const std::vector<std::int32_t>& part,
+                   const PartitionQuality& q, double seconds_per_unit, const Network& net) {
+  Projection pr;
+  double total = 0;
+  std::vector<double> weight(q.parts, 0.0);
+  for (std::size_t b = 0; b < g.n(); ++b) {
+    const double w = g.vwgt.empty() ? 1.0 : g.vwgt[b];
+    total += w;
+    weight[part[b]] += w;
+  }
+  pr.compute_s = *std::max_element(weight.begin(), weight.end()) * seconds_per_unit;
+  pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth;
+  pr.ratio = pr.comm_s > 0 ? pr.compute_s / pr.comm_s : 0.0;
+  const double ideal = total * seconds_per_unit / q.parts;
+  pr.efficiency = ideal / (pr.compute_s + pr.comm_s);
+  return pr;
+}
+
+}  // namespace cdem

@@ -1,0 +1,91 @@
+// Domain decomposition of the block graph (issue 17, first part): METIS k-way partitions of the
+// blocks, and what a distributed run would exchange with them (docs/parallel.md).
+//
+// The graph: a vertex per block, an edge per interface (two blocks sharing a face). Vertex
+// weights are the blocks' step cost (block_weight), edge weights the interface's spring points
+// (the data an owner sends across per step); blocks that one charge binds get a heavy edge
+// between them, so that a cut through a charge is avoided where the balance allows it.
+//
+// The exchange model (partition_quality): each part keeps one layer of ghost blocks (the blocks
+// of other parts that share an interface with one of its own). Per step a part receives its
+// ghost blocks' node positions and velocities (6 doubles per node), and for every cut interface
+// it owns it sends the spring forces of its points to the other side (3 doubles per point);
+// each neighbouring part is one message each way per exchange, two exchanges per step.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cdem/mesh/mesh.hpp"
+#include "cdem/model/model.hpp"
+
+namespace cdem {
+
+// CSR graph in METIS's layout (xadj has n + 1 entries).
+struct BlockGraph {
+  std::vector<std::int32_t> xadj, adjncy, vwgt, adjwgt;
+  int nodes_per_block = 4;   // for the exchange model (the most common element's)
+  int points_per_iface = 3;  // spring points per interface: 2 in 2D, 3 in 3D
+  std::size_t n() const { return xadj.empty() ? 0 : xadj.size() - 1; }
+};
+
+// Step cost of a block in weight units, from the kernel split of `cdemblast bench` (tied mode,
+// 1 thread, docs/performance.md): the block kernel ~10 units per tetrahedron (quad 8, triangle
+// 4, all at ~5 ns per unit), plus 1 per interface (the tie check, and the spring update once the
+// interface opens, shared by its two blocks).
+std::int32_t block_weight(ElemType type, int interfaces);
+
+// The graph of a model (its interfaces). `together`: per block a group id (>= 0) for blocks
+// that must stay in one part where possible (bound to one charge), -1 otherwise; may be empty.
+BlockGraph block_graph(const Model& m, const std::vector<std::int32_t>& together = {});
+// The same graph from a mesh (elements sharing a face), without building the model: for
+// partitioning models too large to set up on this machine (the scale projection).
+BlockGraph mesh_block_graph(const Mesh& mesh);
+
+// Per block the charge that binds it (bar b: b; solid charge c: number of bars + c), -1 for the
+// others: the `together` groups of block_graph.
+struct BarCharges;
+struct SolidCharges;
+std::vector<std::int32_t> charge_groups(std::size_t n_blocks, const BarCharges& bars,
+                                        const SolidCharges& solids);
+
+// True when the program was built with METIS.
+bool have_metis();
+
+// METIS_PartGraphKway into `parts` parts (edge-cut objective, load imbalance tolerance
+// `ufactor`, e.g. 1.03), fixed seed: the same partition on every run. parts == 1 gives all
+// zeros. Throws std::runtime_error without METIS or when METIS fails.
+std::vector<std::int32_t> partition_kway(const BlockGraph& g, int parts, double ufactor = 1.03);
+
+struct PartitionQuality {
+  int parts = 0;
+  std::int64_t edge_cut = 0;        // interfaces whose two blocks are in different parts
+  double edge_cut_share = 0;        // of all interfaces
+  double imbalance = 0;             // max part weight / mean part weight
+  std::int64_t blocks_min = 0, blocks_max = 0;
+  std::int64_t ghosts_max = 0;      // ghost blocks of the part with the most
+  double ghosts_mean = 0;
+  int neighbours_max = 0;           // parts a part exchanges with
+  double neighbours_mean = 0;
+  double bytes_max = 0, bytes_mean = 0;  // bytes received + sent per part per step
+  double messages_max = 0;               // messages per part per step (both ways, 2 exchanges)
+  std::int64_t together_split = 0;  // groups of `together` blocks spread over more than 1 part
+};
+PartitionQuality partition_quality(const BlockGraph& g, const std::vector<std::int32_t>& part, int parts,
+                                   const std::vector<std::int32_t>& together = {});
+
+// A network for the projection: latency (s) per message and bandwidth (bytes/s).
+struct Network {
+  double latency = 2e-6;
+  double bandwidth = 100e9 / 8;  // 100 Gb/s
+};
+// Per step of the part with the most work: compute = its weight x (seconds per weight unit);
+// communication = its messages x latency + its bytes / bandwidth; efficiency without overlap
+// = compute(1 part) / parts / (compute + communication).
+struct Projection {
+  double compute_s = 0, comm_s = 0, ratio = 0, efficiency = 0;
+};
+Projection project(const BlockGraph& g, const std::vector<std::int32_t>& part,
+                   const PartitionQuality& q, double seconds_per_unit, const Network& net);
+
+}  // namespace cdem

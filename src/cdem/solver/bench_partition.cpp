@@ -1,0 +1,115 @@
+// `cdemblast bench --partition`: the scale projection of issue 17 (docs/parallel.md). The bench
+// box is generated at each size as a mesh, its block graph built from the shared faces (no
+// model: a 10M-block model would not fit this machine's memory), partitioned by METIS, and each
+// partition's exchange projected onto a network from the cost per block-step measured here.
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include "cdem/parallel/partition.hpp"
+#include "cdem/solver/bench.hpp"
+#include "cdem/solver/run.hpp"
+
+namespace cdem {
+namespace {
+
+// ns per block-step on one core: the 30k box (tied, Mohr-Coulomb, one bar), 100 steps after
+// 20 untimed ones, best of 3.
+double measure_step_ns() {
+  const double h = 0.05;
+  const auto cells = bench::tet_cells_for(30000);
+  const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
+  const Case c = bench::box_case(3, extent, h, InterfaceLaw::MohrCoulomb, 1);
+  const Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], h);
+  omp_set_num_threads(1);
+  PreparedCase pc = prepare_case(c, mesh);
+  add_charge_loads(pc);
+  for (int s = 0; s < 20; ++s) pc.sim.step();
+  double best = 1e300;
+  for (int rep = 0; rep < 3; ++rep) {
+    const double t0 = omp_get_wtime();
+    for (int s = 0; s < 100; ++s) pc.sim.step();
+    best = std::min(best, omp_get_wtime() - t0);
+  }
+  return best / (100.0 * static_cast<double>(pc.sim.model().n_blocks())) * 1e9;
+}
+
+}  // namespace
+
+int run_partition_projection(const BenchOptions& opt) {
+  if (!have_metis()) {
+    std::fprintf(stderr, "error: bench --partition: this cdemblast was built without METIS "
+                         "(install libmetis-dev and rebuild)\n");
+    return 1;
+  }
+  const double step_ns = opt.step_ns > 0 ? opt.step_ns : measure_step_ns();
+  const Network net;
+  std::vector<std::int64_t> sizes = opt.partition_blocks;
+  if (sizes.empty()) sizes.push_back(opt.blocks);
+  std::string json = fmt::format("{{\"ns_per_block_step_1_core\": {:.4g}, \"latency_s\": {:.3g}, "
+                                 "\"bandwidth_bytes_s\": {:.4g}, \"models\": [",
+                                 step_ns, net.latency, net.bandwidth);
+  if (!opt.json)
+    std::printf("cost per block-step on one core: %.1f ns (%s); network: %.0f Gb/s, %.1f us per "
+                "message; no overlap of communication and computation\n",
+                step_ns, opt.step_ns > 0 ? "given" : "measured on the 30k box, 1 thread",
+                net.bandwidth * 8 / 1e9, net.latency * 1e6);
+  for (std::size_t si = 0; si < sizes.size(); ++si) {
+    const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, sizes[si]));
+    double t0 = omp_get_wtime();
+    Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], 0.05);
+    const double mesh_s = omp_get_wtime() - t0;
+    t0 = omp_get_wtime();
+    const BlockGraph g = mesh_block_graph(mesh);
+    const double graph_s = omp_get_wtime() - t0;
+    Mesh().vertices.swap(mesh.vertices);
+    mesh = Mesh();
+    double wsum = 0;
+    for (auto w : g.vwgt) wsum += w;
+    const double s_per_unit = step_ns * 1e-9 * static_cast<double>(g.n()) / wsum;
+    if (!opt.json)
+      std::printf("\nbench box %d x %d x %d cubes: %zu blocks, %zu interfaces; mesh %.2f s, graph "
+                  "%.2f s\n"
+                  "parts  METIS s  blocks/part  imbalance  cut %%  ghosts/part (mean, max)  "
+                  "neighbours (mean, max)  kB/step/part (mean, max)  compute us  comm us  "
+                  "compute/comm  efficiency\n",
+                  cells[0], cells[1], cells[2], g.n(), g.adjncy.size() / 2, mesh_s, graph_s);
+    json += fmt::format("{}{{\"blocks\": {}, \"interfaces\": {}, \"mesh_s\": {:.4g}, \"graph_s\": "
+                        "{:.4g}, \"partitions\": [",
+                        si ? ", " : "", g.n(), g.adjncy.size() / 2, mesh_s, graph_s);
+    for (std::size_t pi = 0; pi < opt.partition_parts.size(); ++pi) {
+      const int parts = opt.partition_parts[pi];
+      t0 = omp_get_wtime();
+      const auto part = partition_kway(g, parts);
+      const double metis_s = omp_get_wtime() - t0;
+      const auto q = partition_quality(g, part, parts);
+      const auto pr = project(g, part, q, s_per_unit, net);
+      if (!opt.json)
+        std::printf("%5d  %7.1f  %11.0f  %9.3f  %5.2f  %10.0f %9lld  %8.1f %7d  %12.0f %9.0f  %10.1f "
+                    "%8.1f  %12.1f  %9.3f\n",
+                    parts, metis_s, static_cast<double>(g.n()) / parts, q.imbalance,
+                    100 * q.edge_cut_share, q.ghosts_mean, static_cast<long long>(q.ghosts_max),
+                    q.neighbours_mean, q.neighbours_max, q.bytes_mean / 1e3, q.bytes_max / 1e3,
+                    pr.compute_s * 1e6, pr.comm_s * 1e6, pr.ratio, pr.efficiency);
+      json += fmt::format(
+          "{}{{\"parts\": {}, \"metis_s\": {:.4g}, \"imbalance\": {:.5g}, \"edge_cut\": {}, "
+          "\"edge_cut_share\": {:.5g}, \"ghosts_mean\": {:.5g}, \"ghosts_max\": {}, "
+          "\"neighbours_mean\": {:.4g}, \"neighbours_max\": {}, \"bytes_mean\": {:.5g}, "
+          "\"bytes_max\": {:.5g}, \"compute_s\": {:.5g}, \"comm_s\": {:.5g}, \"ratio\": {:.5g}, "
+          "\"efficiency\": {:.5g}}}",
+          pi ? ", " : "", parts, metis_s, q.imbalance, q.edge_cut, q.edge_cut_share, q.ghosts_mean,
+          q.ghosts_max, q.neighbours_mean, q.neighbours_max, q.bytes_mean, q.bytes_max, pr.compute_s,
+          pr.comm_s, pr.ratio, pr.efficiency);
+      std::fflush(stdout);
+    }
+    json += "]}";
+  }
+  json += "]}";
+  if (opt.json) std::printf("%s\n", json.c_str());
+  return 0;
+}
+
+}  // namespace cdem

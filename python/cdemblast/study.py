@@ -684,6 +684,20 @@ def choose_times(run, times):
     return out
 
 
+def charge_cells(v, frame):
+    """The variant's charge-cell mask for a field output (None when its set-up has none or the
+    output's cells differ)."""
+    if v.setup is None or v.setup.measures is None or v.setup.charge_cell.size != frame.grid.ncells:
+        return None
+    return v.setup.charge_cell
+
+
+def panel_grid(nr, nc, aspect):
+    """A figure of nr x nc map panels (rows: variants, columns: times) with a shared colour bar."""
+    w, h = plots.figsize_for(nc, nr, aspect, 3.4, False, True, 2)
+    return plt.subplots(nr, nc, squeeze=False, constrained_layout=True, figsize=(max(w, 7.5), h))
+
+
 def plot_vertical(variants, times, out_dir, written, notes):
     """Vertical displacement (along up) at the chosen times, one shared diverging colour scale
     over every panel (clipped at the 99th percentile of |u_up|, arrows on the colour bar).
@@ -706,8 +720,7 @@ def plot_vertical(variants, times, out_dir, written, notes):
         for v, frames in rows:
             row = []
             for f in frames:
-                charge = (v.setup.charge_cell if v.setup is not None and v.setup.measures is not None
-                          and v.setup.charge_cell.size == f.grid.ncells else None)
+                charge = charge_cells(v, f)
                 if kind == "top":
                     top = f.top_faces()
                     if top is None:
@@ -737,10 +750,7 @@ def plot_vertical(variants, times, out_dir, written, notes):
         nc = max(len(r) for _, r in panels)
         f0, p0, _v0, i0, _c0 = next(x for _, r in panels for x in r)
         box = plots.view_box([p for _, r in panels for _f, p, _v, _i, _c in r], f0, i0)
-        aspect = plots.box_aspect(box)
-        w, h = plots.figsize_for(nc, nr, aspect, 3.4, False, True, 2)
-        fig, axes = plt.subplots(nr, nc, squeeze=False, constrained_layout=True,
-                                 figsize=(max(w, 7.5), h))
+        fig, axes = panel_grid(nr, nc, plots.box_aspect(box))
         m, handle = None, None
         for r, (v, row) in enumerate(panels):
             for c in range(nc):
@@ -787,20 +797,16 @@ def plot_damage(variants, times, out_dir, written, notes):
     f0 = rows[0][1][0]
     v0 = f0.view()
     aspect = plots.box_aspect(plots.view_box([v0.polys], f0, v0.idx))
-    nr, nc = len(rows), max(len(frames) for _, frames in rows)
-    w, h = plots.figsize_for(nc, nr, aspect, 3.4, False, True, 2)
-    fig, axes = plt.subplots(nr, nc, squeeze=False, constrained_layout=True,
-                             figsize=(max(w, 7.5), h))
+    fig, axes = panel_grid(len(rows), max(len(frames) for _, frames in rows), aspect)
     m = None
     for r, (v, frames) in enumerate(rows):
-        for c in range(nc):
+        for c in range(axes.shape[1]):
             ax = axes[r, c]
             if c >= len(frames):
                 ax.set_visible(False)
                 continue
             f = frames[c]
-            charge = (v.setup.charge_cell if v.setup is not None and v.setup.measures is not None
-                      and v.setup.charge_cell.size == f.grid.ncells else None)
+            charge = charge_cells(v, f)
             got = plots.plot_damage_final(v.run, f, out_dir, None, written, ax=ax, fig=fig,
                                           charge=charge)
             m = m if m is not None else got

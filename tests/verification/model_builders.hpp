@@ -148,6 +148,29 @@ void assign_region(Mesh& mesh, const std::string& name, Pred pred) {
   }
 }
 
+// The two ends of a bar along x (the free-free vibration tests): its nodes at the smallest and
+// the largest reference x, and its length between them; length_change(m) is the mean x of the
+// right end less that of the left, less the rest length.
+struct BarEnds {
+  double x0 = 1e300, len = 0;
+  std::vector<std::int32_t> left, right;
+  explicit BarEnds(const Model& m) {
+    double x1 = -1e300;
+    for (const auto& p : m.X_nodes()) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
+    len = x1 - x0;
+    for (std::size_t n = 0; n < m.n_nodes(); ++n) {
+      if (m.X(n).x < x0 + 1e-9) left.push_back(static_cast<std::int32_t>(n));
+      if (m.X(n).x > x1 - 1e-9) right.push_back(static_cast<std::int32_t>(n));
+    }
+  }
+  double length_change(const Model& m) const {
+    double a = 0, b = 0;
+    for (auto n : left) a += m.x[n].x;
+    for (auto n : right) b += m.x[n].x;
+    return b / right.size() - a / left.size() - len;
+  }
+};
+
 // Two arrays equal bit for bit (memcmp): the vectorised kernels against their references.
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {

@@ -56,14 +56,8 @@ VibrationResult vibrate(const Mesh& mesh, Start start, double n_periods_min, dou
   const auto mat = rock(1e10, 0.25, 2500);
   const auto glue = interface_of(InterfaceLaw::Elastic);
   Model model = make_model(mesh, mat, glue);
-  double x0 = 1e300, x1 = -1e300;
-  for (const auto& p : model.X_nodes()) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
-  const double len = x1 - x0;
-  std::vector<std::int32_t> left, right;
-  for (std::size_t n = 0; n < model.n_nodes(); ++n) {
-    if (model.X(n).x < x0 + 1e-9) left.push_back(static_cast<std::int32_t>(n));
-    if (model.X(n).x > x1 - 1e-9) right.push_back(static_cast<std::int32_t>(n));
-  }
+  const BarEnds ends(model);
+  const double x0 = ends.x0, len = ends.len;
   Vec3 c{};
   for (const auto& p : model.X_nodes()) c += p;
   c = c / static_cast<double>(model.n_nodes());
@@ -102,14 +96,7 @@ VibrationResult vibrate(const Mesh& mesh, Start start, double n_periods_min, dou
   // Initial energy computed here, independently of Simulation's own book-keeping: the kinetic
   // energy of the velocity field, or the strain energy of the stretched state (no velocity).
   r.e0 = start == Start::Velocity ? e_kin0 : sim.energy().mechanical();
-  auto length = [&]() {
-    const Model& m = sim.model();
-    double a = 0, b = 0;
-    for (auto n : left) a += m.x[n].x;
-    for (auto n : right) b += m.x[n].x;
-    return b / right.size() - a / left.size();
-  };
-  double prev = length() - len;
+  double prev = ends.length_change(sim.model());
   int crossings = 0;
   double t_first = -1, t_last = -1, shadow0 = 0;
   bool free_started = false;
@@ -120,7 +107,7 @@ VibrationResult vibrate(const Mesh& mesh, Start start, double n_periods_min, dou
     if (sample) v_before = sim.model().v;
     sim.step(sample);
     const bool is_free = sim.time() > t_free;
-    const double now = length() - len;
+    const double now = ends.length_change(sim.model());
     if (is_free && (prev < 0) != (now < 0)) {
       ++crossings;
       if (t_first < 0) t_first = sim.time();

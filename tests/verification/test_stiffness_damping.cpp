@@ -48,15 +48,10 @@ Decay free_decay(const Mesh& mesh, double beta, int n_peaks) {
   const auto mat = damped_rock(beta);
   const auto glue = interface_of(InterfaceLaw::Elastic);
   Model model = make_model(mesh, mat, glue);
-  double x0 = 1e300, x1 = -1e300;
-  for (const auto& p : model.X_nodes()) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x);
-  const double len = x1 - x0;
-  std::vector<std::int32_t> left, right;
+  const BarEnds ends(model);
   double e0 = 0;
   for (std::size_t n = 0; n < model.n_nodes(); ++n) {
-    if (model.X(n).x < x0 + 1e-9) left.push_back(static_cast<std::int32_t>(n));
-    if (model.X(n).x > x1 - 1e-9) right.push_back(static_cast<std::int32_t>(n));
-    model.v[n] = {0.1 * std::cos(kPi * (model.X(n).x - x0) / len), 0, 0};
+    model.v[n] = {0.1 * std::cos(kPi * (model.X(n).x - ends.x0) / ends.len), 0, 0};
     e0 += 0.5 * model.mass[n] * dot(model.v[n], model.v[n]);
   }
   // Tied mode: the elastic interfaces hold, so the stiffness is the blocks' alone, all of it
@@ -64,13 +59,7 @@ Decay free_decay(const Mesh& mesh, double beta, int n_peaks) {
   Case cs = make_case({mat}, {glue}, 0.5);
   cs.interface_mode = InterfaceMode::Tied;
   Simulation sim(std::move(model), cs);
-  auto length = [&]() {
-    const Model& m = sim.model();
-    double a = 0, b = 0;
-    for (auto n : left) a += m.x[n].x;
-    for (auto n : right) b += m.x[n].x;
-    return b / right.size() - a / left.size() - len;
-  };
+  auto length = [&]() { return ends.length_change(sim.model()); };
   Decay d;
   std::vector<double> pt, pa;  // peak times and amplitudes (parabola through 3 samples)
   double ym2 = 0, ym1 = length();

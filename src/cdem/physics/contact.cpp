@@ -174,66 +174,6 @@ double simplex_tolerance_reach(ElemType t, const Vec3* x, const std::array<Vec3,
   return r_in > 0 ? tol * far / r_in : kInf;
 }
 
-namespace {
-
-// The pairs to look at this step (cs.visit, ascending), with sleep on: those holding a contact
-// face (pair_kf >= 0) and those whose wake bound drift_all has reached (pair_gwake <= d, -1:
-// always), exactly the pairs the sweep over every pair would not skip. Last step's visits are
-// filtered (a pair can only have changed its kf or gwake by being looked at), the buckets up to
-// d's are emptied, and `forced` (gwake set to -1 outside the sweep) added. A pair filed in a
-// bucket may be found there again after it was woken another way (forced): the flag skips it,
-// and an entry that comes early is filed again under its current bound. (Looking at more pairs
-// than due would change no result, only the cost: the sleep only skips pairs proven apart.)
-void select_visits(ContactSet& cs, double d, const std::vector<std::int32_t>& forced) {
-  const std::int8_t* const kf = cs.pair_kf.data();
-  const double* const gwake = cs.pair_gwake.data();
-  std::uint8_t* const in = cs.pair_in_visit.data();
-  const double q = cs.wake_quantum;
-  auto due = [&](std::int32_t p) { return kf[p] >= 0 || !(d < gwake[p]); };
-  auto file = [&](std::int32_t p) { cs.wake_buckets[static_cast<std::int64_t>(std::floor(gwake[p] / q))].push_back(p); };
-  std::vector<std::int32_t>& v = cs.visit;
-  std::size_t keep = 0;
-  if (cs.visit_all) {
-    cs.visit_all = false;
-    cs.wake_buckets.clear();
-    v.clear();
-    const auto npair = static_cast<std::int32_t>(cs.pair_node.size());
-    for (std::int32_t p = 0; p < npair; ++p) {
-      in[p] = 0;
-      if (due(p)) v.push_back(p), in[p] = 1;
-      else file(p);
-    }
-    keep = v.size();
-  } else {
-    for (std::int32_t p : v) {
-      in[p] = 0;
-      if (due(p)) v[keep++] = p, in[p] = 1;
-      else file(p);
-    }
-    v.resize(keep);
-  }
-  const auto top = static_cast<std::int64_t>(std::floor(d / q));
-  std::vector<std::int32_t> again;
-  while (!cs.wake_buckets.empty() && cs.wake_buckets.begin()->first <= top) {
-    auto node = cs.wake_buckets.extract(cs.wake_buckets.begin());
-    for (std::int32_t p : node.mapped()) {
-      if (in[p]) continue;
-      if (due(p)) v.push_back(p), in[p] = 1;
-      else again.push_back(p);
-    }
-  }
-  for (std::int32_t p : forced)
-    if (!in[p]) v.push_back(p), in[p] = 1;
-  for (std::int32_t p : again)
-    if (!in[p]) file(p);
-  if (v.size() > keep) {  // the kept part is ascending: sort the rest and merge
-    std::sort(v.begin() + static_cast<std::ptrdiff_t>(keep), v.end());
-    std::inplace_merge(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(keep), v.end());
-  }
-}
-
-}  // namespace
-
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
   // Rebuild when a candidate node has moved more than skin / 2, or when points were released
@@ -358,13 +298,11 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       cs.cb_drift[2 * j + 1] = std::numeric_limits<double>::infinity();
       over_cap = 1;
     }
-  std::vector<std::int32_t> forced;
   if (over_cap)
     for (std::int64_t j = 0; j < ncb; ++j)
       if (cs.cb_drift[2 * j + 1] == std::numeric_limits<double>::infinity())
         for (auto i = cs.cb_pair_start[j]; i < cs.cb_pair_start[j + 1]; ++i) {
           cs.pair_gwake[cs.cb_pair[i]] = -1.0;
-          forced.push_back(cs.cb_pair[i]);
         }
   // The near list: each thread flags and counts a contiguous range of pairs, then writes its
   // near pairs at its offset, so the list is in pair order for any thread count. (The counts are
@@ -379,10 +317,6 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // path lengths are sums rounded differently.)
   const double drift_all = cs.drift_all;
   const bool sleep = cs.cfg.sleep;
-  if (sleep) select_visits(cs, drift_all, forced);
-  // with sleep off every pair, in order (no list)
-  const std::int64_t nvisit = sleep ? static_cast<std::int64_t>(cs.visit.size()) : npair;
-  const std::int32_t* const visit = sleep ? cs.visit.data() : nullptr;
   // (the arrays through local pointers: a store to a byte array may alias anything, and the
   // compiler reloaded every vector's data pointer after each)
   const std::int8_t* const kf_ = cs.pair_kf.data();
@@ -396,10 +330,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   {
     const auto t = static_cast<std::int64_t>(omp_get_thread_num());
     const auto nt = static_cast<std::int64_t>(omp_get_num_threads());
-    const std::int64_t lo = nvisit * t / nt, hi = nvisit * (t + 1) / nt;
+    const std::int64_t lo = npair * t / nt, hi = npair * (t + 1) / nt;
     std::int64_t count = 0, tests = 0;
-    for (std::int64_t i = lo; i < hi; ++i) {
-      const std::int64_t p = visit ? visit[i] : i;
+    for (std::int64_t p = lo; p < hi; ++p) {
       bool near = kf_[p] >= 0;
       if (!near && sleep && drift_all < gwake[p]) {  // (most pairs: asleep on drift_all)
         pnear[p] = 0;
@@ -446,10 +379,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
     std::int32_t* const out = cs.near.data();
     std::int64_t o = cs.near_count[t];
-    for (std::int64_t i = lo; i < hi; ++i) {
-      const std::int64_t p = visit ? visit[i] : i;
+    for (std::int64_t p = lo; p < hi; ++p)
       if (pnear[p]) out[o++] = static_cast<std::int32_t>(p);
-    }
   }
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair
@@ -768,7 +699,7 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
            cs.near, cs.near_group, cs.pair_near, cs.pair_off, cs.pair_wake, cs.node_drift,
-           cs.pair_gwake, cs.cb_pair_start, cs.cb_pair, cs.visit, cs.pair_in_visit,
+           cs.pair_gwake, cs.cb_pair_start, cs.cb_pair,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
            cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand) +
          b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.eb_block, cs.bp_ia, cs.bp_ib,

@@ -44,7 +44,6 @@
 #pragma once
 #include <array>
 #include <cstdint>
-#include <map>
 #include <vector>
 
 #include "cdem/model/model.hpp"
@@ -146,17 +145,6 @@ struct ContactSet {
   std::vector<double> pair_gwake;  // per pair: the drift_all before which it is not tested again
   // per candidate block, its pairs (CSR): woken when the block's tolerance reach is over the cap
   std::vector<std::int32_t> cb_pair_start, cb_pair;
-  // The pairs looked at this step, ascending: those holding a contact face and those whose
-  // drift_all wake bound has been reached (with sleep off: all). A pair not looked at is filed in
-  // wake_buckets under floor(pair_gwake / wake_quantum) until drift_all reaches that bucket, so a
-  // step touches only the pairs it looks at, not every pair to find them (contact.cpp,
-  // select_visits). Derived from pair_kf and pair_gwake: after a build or a restart
-  // (visit_all) the first step files every pair.
-  std::vector<std::int32_t> visit;
-  std::vector<std::uint8_t> pair_in_visit;
-  std::map<std::int64_t, std::vector<std::int32_t>> wake_buckets;
-  double wake_quantum = 0;
-  bool visit_all = true;
   std::vector<std::int64_t> near_count;
   // face-side gather: per node its slot in the step's sums (-1 none), the nodes touched, and
   // their sums (formed in pair order, then added)

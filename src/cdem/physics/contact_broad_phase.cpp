@@ -306,12 +306,6 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.node_drift.assign(m.n_nodes(), 0.0);
   cs.drift_all = 0;
   cs.pair_gwake.assign(npair, 0.0);
-  cs.visit_all = true;  // (every pair is due: gwake 0)
-  cs.visit.clear();
-  cs.visit.reserve(npair);
-  cs.pair_in_visit.assign(npair, 0);
-  cs.wake_buckets.clear();
-  cs.wake_quantum = cs.skin > 0 ? cs.skin / 64 : 1e-3;
   cs.cb_pair_start.assign(cs.cblock.size() + 1, 0);
   for (std::size_t p = 0; p < npair; ++p) ++cs.cb_pair_start[cs.pair_cb[p] + 1];
   for (std::size_t j = 0; j < cs.cblock.size(); ++j) cs.cb_pair_start[j + 1] += cs.cb_pair_start[j];

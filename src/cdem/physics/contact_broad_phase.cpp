@@ -99,6 +99,7 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   for (std::size_t f = 0; f < cs.face_iface.size(); ++f) {
     const std::int32_t b = static_cast<std::int32_t>(f / 4), k = static_cast<std::int32_t>(f % 4);
     if (k >= local_faces(m.block_type[b]).count) continue;
+    if (!m.no_contact.empty() && m.no_contact[b]) continue;  // (a collapsed explosive block)
     const std::int32_t i = cs.face_iface[f];
     if (i >= 0 && !(cs.cfg.cracked_faces ? iface_cracked[i] : iface_released[i])) continue;
     cs.cand_faces.push_back(static_cast<std::int32_t>(f));

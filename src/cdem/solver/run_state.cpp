@@ -34,6 +34,8 @@ void io_state(StateArchive& ar, Model& m) {
   ar.io("model.sp_break_time", m.sp_break_time);
   ar.io("model.sp_dissipated", m.sp_dissipated);
   ar.io("model.released_points", m.released_points);
+  // (only when some block has it: checkpoints from before the array existed still load)
+  if (ar.loading() ? ar.has("model.no_contact") : !m.no_contact.empty()) ar.io("model.no_contact", m.no_contact);
   // tied mode: the ties, the clusters, the active interfaces
   ar.io("model.tied", m.tied);
   ar.io("model.sp_tied", m.sp_tied);

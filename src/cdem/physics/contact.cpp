@@ -188,10 +188,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     if (cs.released_seen < 0) {
       due = true;  // the first build
     } else {
-      const auto nn = static_cast<std::int64_t>(m.n_nodes());
+      // (over the nodes that can take part in contact: a collapsed explosive block's nodes are
+      // free masses, often the fastest, and would trigger rebuilds for nothing)
+      const auto nbk = static_cast<std::int64_t>(m.n_blocks());
+      const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
       double v2 = 0;
 #pragma omp parallel for schedule(static) reduction(max : v2)
-      for (std::int64_t n = 0; n < nn; ++n) v2 = std::max(v2, dot(m.v[n], m.v[n]));
+      for (std::int64_t b = 0; b < nbk; ++b) {
+        if (skip && skip[b]) continue;
+        for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
+          v2 = std::max(v2, dot(m.v[n], m.v[n]));
+      }
       cs.release_drift += 2.0 * std::sqrt(v2) * dt;
       due = cs.release_drift > kReleaseDrift * cs.skin;
     }
@@ -210,14 +217,19 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (due) rebuild_contact_pairs(m, cs);  // (every pair is tested this step: the wakes and drifts start at 0)
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
   if (!due && npair > 0) {
-    // each node's path length since the build (the bound on how far it has moved)
-    const auto nn = static_cast<std::int64_t>(m.n_nodes());
+    // each node's path length since the build (the bound on how far it has moved); not for
+    // the nodes that take no part in contact (above)
+    const auto nbk = static_cast<std::int64_t>(m.n_blocks());
+    const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
     double vmax = 0;
 #pragma omp parallel for schedule(static) reduction(max : vmax)
-    for (std::int64_t n = 0; n < nn; ++n) {
-      const double vn = std::sqrt(dot(m.v[n], m.v[n]));
-      cs.node_drift[n] += vn * dt;
-      vmax = std::max(vmax, vn);
+    for (std::int64_t b = 0; b < nbk; ++b) {
+      if (skip && skip[b]) continue;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+        const double vn = std::sqrt(dot(m.v[n], m.v[n]));
+        cs.node_drift[n] += vn * dt;
+        vmax = std::max(vmax, vn);
+      }
     }
     cs.drift_all += vmax * dt;
   }

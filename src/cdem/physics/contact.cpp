@@ -183,25 +183,30 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // most this (10 % of the skin); a breaking model releases points nearly every step, and a
   // rebuild at each cost most of its step.
   constexpr double kReleaseDrift = 0.1;
-  bool due = false;
-  if (cs.released_seen != m.released_points) {
-    if (cs.released_seen < 0) {
-      due = true;  // the first build
-    } else {
-      // (over the nodes that can take part in contact: a collapsed explosive block's nodes are
-      // free masses, often the fastest, and would trigger rebuilds for nothing)
-      const auto nbk = static_cast<std::int64_t>(m.n_blocks());
-      const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
-      double v2 = 0;
-#pragma omp parallel for schedule(static) reduction(max : v2)
-      for (std::int64_t b = 0; b < nbk; ++b) {
-        if (skip && skip[b]) continue;
-        for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
-          v2 = std::max(v2, dot(m.v[n], m.v[n]));
+  // The nodes' motion this step, in one pass over the nodes that can take part in contact (a
+  // collapsed explosive block's nodes are free masses, often the fastest, and would trigger
+  // rebuilds for nothing): each node's path length since the build (the bound on how far it
+  // has moved, for the sleep) and the largest speed. A rebuild below starts both from 0 again.
+  const bool first_build = cs.released_seen < 0;
+  const bool release_pending = !first_build && cs.released_seen != m.released_points;
+  double vmax = 0;
+  if (release_pending || !cs.pair_node.empty()) {
+    const auto nbk = static_cast<std::int64_t>(m.n_blocks());
+    const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
+#pragma omp parallel for schedule(static) reduction(max : vmax)
+    for (std::int64_t b = 0; b < nbk; ++b) {
+      if (skip && skip[b]) continue;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+        const double vn = std::sqrt(dot(m.v[n], m.v[n]));
+        cs.node_drift[n] += vn * dt;
+        vmax = std::max(vmax, vn);
       }
-      cs.release_drift += 2.0 * std::sqrt(v2) * dt;
-      due = cs.release_drift > kReleaseDrift * cs.skin;
     }
+  }
+  bool due = first_build;
+  if (release_pending) {
+    cs.release_drift += 2.0 * vmax * dt;
+    due = cs.release_drift > kReleaseDrift * cs.skin;
   }
   if (!due) {
     const auto nc = static_cast<std::int64_t>(cs.cand_nodes.size());
@@ -216,23 +221,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   }
   if (due) rebuild_contact_pairs(m, cs);  // (every pair is tested this step: the wakes and drifts start at 0)
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
-  if (!due && npair > 0) {
-    // each node's path length since the build (the bound on how far it has moved); not for
-    // the nodes that take no part in contact (above)
-    const auto nbk = static_cast<std::int64_t>(m.n_blocks());
-    const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
-    double vmax = 0;
-#pragma omp parallel for schedule(static) reduction(max : vmax)
-    for (std::int64_t b = 0; b < nbk; ++b) {
-      if (skip && skip[b]) continue;
-      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
-        const double vn = std::sqrt(dot(m.v[n], m.v[n]));
-        cs.node_drift[n] += vn * dt;
-        vmax = std::max(vmax, vn);
-      }
-    }
-    cs.drift_all += vmax * dt;
-  }
+  if (!due) cs.drift_all += vmax * dt;
   if (npair == 0) {
     std::int64_t none = 0;
     double pen = 0;

@@ -616,6 +616,11 @@ double current_volume_ratio(const Model& m, std::size_t b) {
 }
 }  // namespace
 
+void leave_contact(Model& m, std::int32_t b) {
+  if (m.no_contact.empty()) m.no_contact.assign(m.n_blocks(), 0);
+  m.no_contact[b] = 1;
+}
+
 void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
   // Decks with a gas body (gas = cavity or cracks): one pressure per deck from the burnt
   // blocks' total volume (a collapsing block no longer gets the pressure of its own tiny volume).
@@ -637,10 +642,6 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
     const double v = current_volume_ratio(m, b);
     m.vol_ratio[b] = v;
     sc.v[i] = v;
-    if (sc.dead[i] && (m.no_contact.empty() || !m.no_contact[b])) {  // (a checkpoint from before
-      if (m.no_contact.empty()) m.no_contact.assign(m.n_blocks(), 0);  // the flag was kept)
-      m.no_contact[b] = 1;
-    }
     if (!sc.dead[i] && !(v > sc.min_volume_ratio)) {
       sc.dead[i] = 1;
       ++sc.dead_count;
@@ -656,8 +657,7 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
       // Its nodes are no longer a solid: they take no part in contact (with every collapsed
       // block's nodes as contact candidates the 5.2 solid case had 3 million candidate pairs
       // by 0.67 ms and contact took 79 % of its time; docs/multihole_3d.md).
-      if (m.no_contact.empty()) m.no_contact.assign(m.n_blocks(), 0);
-      m.no_contact[b] = 1;
+      leave_contact(m, b);
       // Its unbreakable interfaces would otherwise keep pulling the rock blocks around it into
       // the collapse (SPEC 5.2 study: a tied rock block inverted next). Their stored energy is
       // booked as dissipated, so the energy balance stays closed.

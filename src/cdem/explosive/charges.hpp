@@ -118,6 +118,10 @@ SolidCharges build_solid_charges(const Model& m, const Case& c);
 
 // Loads the rock from the explosive blocks at time t.
 void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);
+// A collapsed explosive block's nodes are no longer a solid (its products have left with it):
+// they take no part in contact (Model::no_contact). solid_loads marks each block as it dies; a
+// checkpoint's dead flags give the same marks when it is loaded (run_state.cpp).
+void leave_contact(Model& m, std::int32_t b);
 
 // charges.csv: per deck and time, the mean applied pressure, the charge volume ratio, the
 // burnt fraction.

@@ -303,7 +303,7 @@ void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string&
   check_checkpoint_case(ar, c, dir, restart_signature(c));
   pc.sim.io_state(ar);
   io_state(ar, pc.bars);
-  io_state(ar, pc.solids);
+  io_state(ar, pc.solids, pc.sim.model());
 }
 
 RunResult run_case(const Case& c, const RunOptions& opt) {
@@ -354,7 +354,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   auto io_run_state = [&](StateArchive& ar) {
     sim.io_state(ar);
     io_state(ar, bars);
-    io_state(ar, solids);
+    io_state(ar, solids, sim.model());
     uplift.io_state(ar);
     ar.io("run.id", run_id);
     ar.io("run.next_hist", next_hist);

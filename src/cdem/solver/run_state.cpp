@@ -34,8 +34,6 @@ void io_state(StateArchive& ar, Model& m) {
   ar.io("model.sp_break_time", m.sp_break_time);
   ar.io("model.sp_dissipated", m.sp_dissipated);
   ar.io("model.released_points", m.released_points);
-  // (only when some block has it: checkpoints from before the array existed still load)
-  if (ar.loading() ? ar.has("model.no_contact") : !m.no_contact.empty()) ar.io("model.no_contact", m.no_contact);
   // tied mode: the ties, the clusters, the active interfaces
   ar.io("model.tied", m.tied);
   ar.io("model.sp_tied", m.sp_tied);
@@ -124,7 +122,7 @@ void io_state(StateArchive& ar, BarCharges& bars) {
   io_state(ar, bars.gas, "bars.gas");
 }
 
-void io_state(StateArchive& ar, SolidCharges& solids) {
+void io_state(StateArchive& ar, SolidCharges& solids, Model& m) {
   ar.io("solids.p", solids.p);
   ar.io("solids.lambda", solids.lambda);
   ar.io("solids.v", solids.v);
@@ -132,6 +130,9 @@ void io_state(StateArchive& ar, SolidCharges& solids) {
   ar.io("solids.t_last", solids.t_last);
   ar.io("solids.dead_count", solids.dead_count);
   io_state(ar, solids.gas, "solids.gas");
+  if (ar.loading())
+    for (std::size_t i = 0; i < solids.block.size(); ++i)
+      if (solids.dead[i]) leave_contact(m, solids.block[i]);
 }
 
 }  // namespace cdem

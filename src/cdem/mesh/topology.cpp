@@ -50,16 +50,24 @@ void quad_reference_gradients(std::span<const Vec3> p, double* out) {
   }
 }
 
-struct FaceRec {
-  std::array<std::int32_t, 3> key;  // sorted vertex ids (-1 padded)
-  std::int32_t block;
-  std::int8_t local;
-  bool operator<(const FaceRec& o) const {
-    return key != o.key ? key < o.key : (block != o.block ? block < o.block : local < o.local);
-  }
-};
-
 }  // namespace
+
+std::vector<FaceRec> sorted_faces(const Mesh& mesh, const std::vector<std::int32_t>& order) {
+  std::vector<FaceRec> faces;
+  faces.reserve(order.size() * 4);
+  for (std::size_t b = 0; b < order.size(); ++b) {
+    const auto e = order[b];
+    const LocalFaces lf = local_faces(mesh.elem_type[e]);
+    for (int k = 0; k < lf.count; ++k) {
+      FaceRec r{{-1, -1, -1}, static_cast<std::int32_t>(b), static_cast<std::int8_t>(k)};
+      for (int i = 0; i < lf.nodes_per_face; ++i) r.key[i] = mesh.elem_vertices[e][lf.f[k][i]];
+      std::sort(r.key.begin(), r.key.begin() + lf.nodes_per_face);
+      faces.push_back(r);
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  return faces;
+}
 
 Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_materials,
                   const std::vector<InterfaceMaterial>& iface_materials, const std::string& where) {
@@ -211,19 +219,7 @@ Model build_model(const Mesh& mesh, const std::vector<BlockMaterial>& block_mate
   m.vol_ratio.assign(ne, 1.0);
 
   // ---- faces: sort by vertex key, pairs become interfaces ----
-  std::vector<FaceRec> faces;
-  faces.reserve(ne * 4);
-  for (std::size_t b = 0; b < ne; ++b) {
-    const auto e = order[b];
-    const LocalFaces lf = local_faces(m.block_type[b]);
-    for (int k = 0; k < lf.count; ++k) {
-      FaceRec r{{-1, -1, -1}, static_cast<std::int32_t>(b), static_cast<std::int8_t>(k)};
-      for (int i = 0; i < lf.nodes_per_face; ++i) r.key[i] = mesh.elem_vertices[e][lf.f[k][i]];
-      std::sort(r.key.begin(), r.key.begin() + lf.nodes_per_face);
-      faces.push_back(r);
-    }
-  }
-  std::sort(faces.begin(), faces.end());
+  const std::vector<FaceRec> faces = sorted_faces(mesh, order);
 
   // Interface material lookup by region pair.
   m.iface_materials = iface_materials;

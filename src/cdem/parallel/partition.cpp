@@ -1,6 +1,7 @@
 #include "cdem/parallel/partition.hpp"
 
 #include "cdem/explosive/charges.hpp"
+#include "cdem/mesh/topology.hpp"
 
 #include <algorithm>
 #include <array>
@@ -34,6 +35,14 @@ void fill_csr(BlockGraph& g, std::size_t n, const std::vector<std::array<std::in
   }
 }
 
+// Nodes of the model's typical block for the exchange model: 4 in 3D (tets); in 2D 4 when
+// quadrilaterals are the majority, else 3.
+int typical_nodes(int dim, const std::vector<ElemType>& types) {
+  if (dim == 3) return 4;
+  const auto quads = std::count(types.begin(), types.end(), ElemType::Quad4);
+  return 2 * static_cast<std::size_t>(quads) > types.size() ? 4 : 3;
+}
+
 }  // namespace
 
 std::int32_t block_weight(ElemType type, int interfaces) {
@@ -55,7 +64,7 @@ BlockGraph block_graph(const Model& m, const std::vector<std::int32_t>& together
   fill_csr(g, n, edges);
   g.vwgt.resize(n);
   for (std::size_t b = 0; b < n; ++b) g.vwgt[b] = block_weight(m.block_type[b], g.xadj[b + 1] - g.xadj[b]);
-  g.nodes_per_block = m.dim == 3 ? 4 : (m.n_nodes() > 3 * n ? 4 : 3);
+  g.nodes_per_block = typical_nodes(m.dim, m.block_type);
   return g;
 }
 
@@ -63,55 +72,21 @@ BlockGraph mesh_block_graph(const Mesh& mesh) {
   BlockGraph g;
   const std::size_t n = mesh.num_elements();
   g.points_per_iface = mesh.dim == 3 ? 3 : 2;
-  // (sorted face vertices, element): sort, then equal neighbours are shared faces
-  struct Face {
-    std::int32_t v[3];
-    std::int32_t elem;
-  };
-  std::vector<Face> faces;
-  faces.reserve(4 * n);
-  std::size_t quads = 0;
-  for (std::size_t e = 0; e < n; ++e) {
-    const auto& ev = mesh.elem_vertices[e];
-    const auto el = static_cast<std::int32_t>(e);
-    switch (mesh.elem_type[e]) {
-      case ElemType::Tet4: {
-        static constexpr int f[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
-        for (const auto& fi : f) {
-          Face x{{ev[fi[0]], ev[fi[1]], ev[fi[2]]}, el};
-          std::sort(x.v, x.v + 3);
-          faces.push_back(x);
-        }
-        break;
-      }
-      case ElemType::Tri3:
-      case ElemType::Quad4: {
-        const int k = mesh.elem_type[e] == ElemType::Quad4 ? 4 : 3;
-        quads += k == 4;
-        for (int i = 0; i < k; ++i) {
-          Face x{{std::min(ev[i], ev[(i + 1) % k]), std::max(ev[i], ev[(i + 1) % k]), -1}, el};
-          faces.push_back(x);
-        }
-        break;
-      }
-    }
-  }
-  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
-    return std::lexicographical_compare(a.v, a.v + 3, b.v, b.v + 3) ||
-           (std::equal(a.v, a.v + 3, b.v) && a.elem < b.elem);
-  });
+  std::vector<std::int32_t> identity(n);
+  std::iota(identity.begin(), identity.end(), 0);
+  std::vector<FaceRec> faces = sorted_faces(mesh, identity);
   std::vector<std::array<std::int32_t, 3>> edges;
   edges.reserve(faces.size() / 2);
   for (std::size_t i = 0; i + 1 < faces.size(); ++i)
-    if (std::equal(faces[i].v, faces[i].v + 3, faces[i + 1].v)) {
-      edges.push_back({faces[i].elem, faces[i + 1].elem, g.points_per_iface});
+    if (faces[i].key == faces[i + 1].key) {
+      edges.push_back({faces[i].block, faces[i + 1].block, g.points_per_iface});
       ++i;
     }
-  std::vector<Face>().swap(faces);
+  std::vector<FaceRec>().swap(faces);
   fill_csr(g, n, edges);
   g.vwgt.resize(n);
   for (std::size_t e = 0; e < n; ++e) g.vwgt[e] = block_weight(mesh.elem_type[e], g.xadj[e + 1] - g.xadj[e]);
-  g.nodes_per_block = mesh.dim == 3 ? 4 : (2 * quads > n ? 4 : 3);
+  g.nodes_per_block = typical_nodes(mesh.dim, mesh.elem_type);
   return g;
 }
 

@@ -116,8 +116,6 @@ void damp_tet(Model& m, std::int32_t b, double blam, double bg, Vec3* fd) {
 
 }  // namespace
 
-bool has_stiffness_damping(const Model& m) { return max_stiffness_damping(m) > 0; }
-
 double max_stiffness_damping(const Model& m) {
   double beta = 0;
   for (const auto& g : m.groups) {

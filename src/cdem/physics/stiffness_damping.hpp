@@ -16,9 +16,6 @@
 
 namespace cdem {
 
-// True when some block material has beta > 0 (m.mat_beta).
-bool has_stiffness_damping(const Model& m);
-
 // Adds the damping forces at the velocities v(n-1/2) to m.f (after block_forces assigned it).
 // fd[n] receives node n's damping force (zero for undamped blocks), power[b] the block's
 // sum fd . v at those velocities (<= 0). Both sized by the caller (n_nodes, n_blocks).

@@ -462,7 +462,8 @@ def measure_variant(v, study, notes):
         out["energy"] = {k: float(e[k][-1]) for k in ("kinetic", "block_strain", "spring_strain",
                                                        "external_work", "gravity_work",
                                                        "explosive_work", "damping", "fracture",
-                                                       "initial", "insertion", "balance", "error")
+                                                       "initial", "insertion", "products_kinetic",
+                                                       "balance", "error")
                          if k in e}
         out["energy"]["time_s"] = float(e["time"][-1])
         out["energy"]["per_metre"] = two_d
@@ -1051,6 +1052,7 @@ def tables(measures, rec, study):
         out.append(("Peak displacement along up at the monitors (mm)", ["monitor"] + labels, rows))
     rows = []
     for key, lab in (("explosive_work", "explosive work"), ("kinetic", "kinetic"),
+                     ("products_kinetic", "kinetic: the products' own part"),
                      ("block_strain", "block strain"), ("spring_strain", "spring strain"),
                      ("damping", "damping + absorbed"), ("fracture", "fracture"),
                      ("error", "balance error (relative)")):

@@ -118,10 +118,12 @@ SolidCharges build_solid_charges(const Model& m, const Case& c);
 
 // Loads the rock from the explosive blocks at time t.
 void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);
-// A collapsed explosive block's nodes are no longer a solid (its products have left with it):
-// they take no part in contact (Model::no_contact). solid_loads marks each block as it dies; a
-// checkpoint's dead flags give the same marks when it is loaded (run_state.cpp).
-void leave_contact(Model& m, std::int32_t b);
+// A solid charge's explosive blocks are its products, a gas glued to the hole's wall by
+// unbreakable interfaces: they take no part in general contact (Model::no_contact), from the
+// start. (Their nodes were contact candidates once: the node at an open collar, driven out at
+// km/s, and later the collapsed blocks' free nodes, made contact rebuild the pairs at nearly
+// every step of the 3D solid case; docs/multihole_3d.md.) Called by the run's set-up.
+void products_leave_contact(Model& m, const SolidCharges& s);
 
 // charges.csv: per deck and time, the mean applied pressure, the charge volume ratio, the
 // burnt fraction.

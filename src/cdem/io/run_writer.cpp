@@ -98,8 +98,8 @@ RunWriter::RunWriter(const std::string& dir, const Case& c, const Model* m, cons
       "time,monitor,sxx,syy,szz,sxy,syz,sxz,von_mises,pressure,ux,uy,uz,vx,vy,vz\n";
   const std::string energy_header =
       "time,kinetic,block_strain,spring_strain,external_work,gravity_work,"
-      "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,balance,"
-      "error\n";
+      "explosive_work,damping,fracture,initial,insertion,contact_strain,contact_friction,"
+      "products_kinetic,balance,error\n";
   const std::string p_monitors = (fs::path(dir) / "monitors.csv").string();
   const std::string p_energy = (fs::path(dir) / "energy.csv").string();
   const std::string p_fracture = (fs::path(dir) / "fracture.csv").string();
@@ -289,10 +289,10 @@ void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
                  s.stress[3], s.stress[4], s.stress[5], s.von_mises, s.pressure, s.displacement.x,
                  s.displacement.y, s.displacement.z, s.velocity.x, s.velocity.y, s.velocity.z);
   }
-  std::fprintf(energy_, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n",
+  std::fprintf(energy_, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n",
                t, e.kinetic, e.block_strain, e.spring_strain, e.external_work, e.gravity_work,
                e.explosive_work, e.damping, e.fracture, e.initial, e.insertion, e.contact_strain,
-               e.contact_friction, e.balance, e.error);
+               e.contact_friction, e.products_kinetic, e.balance, e.error);
   const FractureDegree fd = fracture_degree(m);
   std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld", t, fd.area, fd.tensile, fd.shear,
                fd.count, static_cast<long long>(fd.broken), static_cast<long long>(fd.total));

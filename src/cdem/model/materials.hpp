@@ -22,6 +22,10 @@ struct BlockMaterial {
   // fragments, grading and funnel like a solid charge's blocks).
   double charge_fraction = 0;
   bool charge_block = false;
+  // The share of the block's mass that is the charge's products (a bar charge block:
+  // phi rho_w / rho_c, set with charge_fraction); an explosive block's is 1.
+  double products_mass = 0;
+  double products_fraction() const { return explosive.empty() ? products_mass : 1.0; }
   // The rock volume fraction of a block of this material (0 for explosive / charge blocks).
   double rock_fraction() const {
     return (!explosive.empty() || charge_block) ? 0.0 : 1.0 - charge_fraction;

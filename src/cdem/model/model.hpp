@@ -115,8 +115,8 @@ struct Model {
   std::vector<std::uint8_t> sp_mode;           // BreakMode
   std::vector<float> sp_break_time;            // s (-1 intact)
   std::vector<double> sp_dissipated;           // J, fracture + friction + plastic work
-  // per block: 1 when it takes no part in general contact (a collapsed explosive block, whose
-  // products have left with it: its nodes are no longer a solid); empty: every block does
+  // per block: 1 when it takes no part in general contact (a solid charge's explosive block: its
+  // products are a gas, products_leave_contact); empty: every block does
   std::vector<std::uint8_t> no_contact;
   std::int64_t released_points = 0;            // spring points released so far (general contact
                                                // rebuilds its candidates when it changes)

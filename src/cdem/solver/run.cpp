@@ -200,6 +200,7 @@ PreparedCase prepare_case(const Case& c, const Mesh& mesh, SetupTimes* times) {
   BarCharges bars = build_bar_charges(model, c);
   const double bar_dt = make_charge_cavities(model, bars);
   SolidCharges solids = build_solid_charges(model, c);
+  products_leave_contact(model, solids);
   lap(&SetupTimes::charges);
   diagnose_time_step(model, c);
   Simulation sim(std::move(model), c);
@@ -303,7 +304,7 @@ void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string&
   check_checkpoint_case(ar, c, dir, restart_signature(c));
   pc.sim.io_state(ar);
   io_state(ar, pc.bars);
-  io_state(ar, pc.solids, pc.sim.model());
+  io_state(ar, pc.solids);
 }
 
 RunResult run_case(const Case& c, const RunOptions& opt) {
@@ -354,7 +355,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   auto io_run_state = [&](StateArchive& ar) {
     sim.io_state(ar);
     io_state(ar, bars);
-    io_state(ar, solids, sim.model());
+    io_state(ar, solids);
     uplift.io_state(ar);
     ar.io("run.id", run_id);
     ar.io("run.next_hist", next_hist);
@@ -592,6 +593,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"energy_error", json_number(last.error)},
       {"kinetic_energy", json_number(last.kinetic)},
       {"explosive_work", json_number(last.explosive_work)},
+      {"products_kinetic_energy", json_number(last.products_kinetic)},
+      {"explosive_work_to_rock", json_number(last.explosive_work - last.products_kinetic)},
       {"bar_segments", std::to_string(bars.n_segments())},
       {"explosive_blocks", std::to_string(solids.block.size())},
       {"collapsed_explosive_blocks", std::to_string(solids.dead_count)},

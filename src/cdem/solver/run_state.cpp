@@ -122,7 +122,7 @@ void io_state(StateArchive& ar, BarCharges& bars) {
   io_state(ar, bars.gas, "bars.gas");
 }
 
-void io_state(StateArchive& ar, SolidCharges& solids, Model& m) {
+void io_state(StateArchive& ar, SolidCharges& solids) {
   ar.io("solids.p", solids.p);
   ar.io("solids.lambda", solids.lambda);
   ar.io("solids.v", solids.v);
@@ -130,9 +130,6 @@ void io_state(StateArchive& ar, SolidCharges& solids, Model& m) {
   ar.io("solids.t_last", solids.t_last);
   ar.io("solids.dead_count", solids.dead_count);
   io_state(ar, solids.gas, "solids.gas");
-  if (ar.loading())
-    for (std::size_t i = 0; i < solids.block.size(); ++i)
-      if (solids.dead[i]) leave_contact(m, solids.block[i]);
 }
 
 }  // namespace cdem

@@ -15,8 +15,6 @@ void io_state(StateArchive& ar, Model& m);
 void io_state(StateArchive& ar, ContactSet& cs);
 void io_state(StateArchive& ar, GasField& g, const std::string& prefix);
 void io_state(StateArchive& ar, BarCharges& bars);
-// (loading also takes the collapsed explosive blocks out of contact: Model::no_contact follows
-// the dead flags)
-void io_state(StateArchive& ar, SolidCharges& solids, Model& m);
+void io_state(StateArchive& ar, SolidCharges& solids);
 
 }  // namespace cdem

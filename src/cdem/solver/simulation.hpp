@@ -32,6 +32,10 @@ struct EnergyBalance {
                                // the moment they were untied (tie_failure.hpp)
   double contact_strain = 0;   // elastic (penalty) energy held by the general contacts
   double contact_friction = 0; // dissipated by the general contacts (friction, damping)
+  double products_kinetic = 0; // of `kinetic`, the charge's products' own (the explosive blocks',
+                               // a bar charge block's products' mass share): not a term of the
+                               // balance; explosive_work - products_kinetic is the energy the
+                               // charge has given to the rock (docs/theory.md "Energy balance")
   // balance = (stored + dissipated) - (initial + work in); error = |balance| / scale
   double balance = 0, error = 0;
   double mechanical() const { return kinetic + block_strain + spring_strain + contact_strain; }
@@ -103,6 +107,8 @@ class Simulation {
 
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
   EnergyBalance energy() const;
+  // The charge's products' share of the kinetic energy (EnergyBalance::products_kinetic).
+  double products_kinetic() const;
 
   // Bytes of the solver's own arrays (per-block energies, boundary-condition arrays), beyond the
   // Model's.

@@ -314,11 +314,13 @@ struct WorkMeter {
   std::vector<Vec3> force, v_old;
   double w_full = 0;  // sum over the steps done of dW_k (up to t_(n+1/2))
   double after = 0;   // the last step's a_n
-  // In the load hook, after the loads were added: copy what this step added (entries from `first`).
-  void record(const AppliedLoads& out, std::size_t first) {
+  // In the load hook, after the loads were added: copy what this step added (entries from
+  // `first`; the charges add single loads) and the velocities v(n-1/2) at their nodes.
+  void record(const Model& m, const AppliedLoads& out, std::size_t first) {
     node.assign(out.node.begin() + static_cast<std::ptrdiff_t>(first), out.node.end());
     force.assign(out.force.begin() + static_cast<std::ptrdiff_t>(first), out.force.end());
-    v_old.assign(out.v_old.begin() + static_cast<std::ptrdiff_t>(first), out.v_old.end());
+    v_old.clear();
+    for (auto n : node) v_old.push_back(m.v[n]);
   }
   // After the step: m.v holds v(n+1/2).
   void finish_step(const Model& m, double dt) {
@@ -356,7 +358,8 @@ std::vector<EnergySample> run_energy(Simulation& sim, WorkMeter& meter, int step
     q.dissipated = e.damping + e.fracture;
     q.error_mid =
         q.work > 0 ? std::abs(q.mechanical + q.dissipated - e.initial - q.work) / q.work : 0.0;
-    // The reported work is the integral of the hook's loads (1e-12: sums in the same order).
+    // The reported work is the integral of the hook's loads (1e-12: the same terms, summed in
+    // another order: each load's two halves apart).
     const double tol = 1e-12 * std::max(std::abs(meter.w_full), 1e-300);
     EXPECT_LE(std::abs(e.explosive_work - meter.w_at_tn()), tol)
         << "step " << k << ": reported " << e.explosive_work << " J, integrated " << meter.w_at_tn()
@@ -424,7 +427,7 @@ std::vector<EnergySample> bar_energy_run(int dt_divisor, double* dt_out = nullpt
   sim.add_load([&bc, &meter](Model& m, AppliedLoads& out, double t) {
     const std::size_t first = out.node.size();
     bar_loads(m, bc, out, t);
-    meter.record(out, first);
+    meter.record(m, out, first);
   });
   if (dt_out) *dt_out = sim.dt();
   auto r = run_energy(sim, meter, static_cast<int>(std::ceil(2e-4 / sim.dt())));
@@ -537,7 +540,7 @@ std::unique_ptr<SolidRun> solid_run() {
   r->sim.add_load([p](Model& m, AppliedLoads& out, double t) {
     const std::size_t first = out.node.size();
     solid_loads(m, p->sc, out, t);
-    p->meter.record(out, first);
+    p->meter.record(m, out, first);
   });
   r->sim.limit_dt(r->sc.dt_limit, "explosive blocks");
   return r;

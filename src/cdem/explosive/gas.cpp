@@ -206,10 +206,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       if (!(p > 0)) continue;
       const std::size_t i = iface_at(k);
       const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
-      for (int q = 0; q < np; ++q) {
-        out.add(m, m.sp_b[i * np + q], f);
-        out.add(m, m.sp_a[i * np + q], -1.0 * f);
-      }
+      for (int q = 0; q < np; ++q) out.add_pair(m, m.sp_b[i * np + q], m.sp_a[i * np + q], f);
     }
   }
 }

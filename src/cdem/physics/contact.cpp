@@ -305,8 +305,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         for (auto i = cs.cb_pair_start[j]; i < cs.cb_pair_start[j + 1]; ++i) {
           cs.pair_gwake[cs.cb_pair[i]] = -1.0;
         }
-  // The near list: each thread flags and counts a contiguous range of pairs, then writes its
-  // near pairs at its offset, so the list is in pair order for any thread count. (The counts are
+  // The near list: each thread lists the near pairs of a contiguous range of pairs at the start
+  // of that range in a scratch array, then copies them to its offset, so the list is in pair
+  // order for any thread count. (The counts are
   // sized for the thread count at the last build; a run's thread count may have grown since:
   // thread_governor.hpp, or bench's 2-thread loop from a 1-thread set-up.)
   if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.near_count.size() < want)
@@ -325,7 +326,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   const double *const drift = cs.node_drift.data(), *const cbd = cs.cb_drift.data();
   const BlockPlanes* const geom = cs.cb_geom.data();
   double *const gwake = cs.pair_gwake.data(), *const pwake = cs.pair_wake.data(), *const g0 = cs.pair_g0.data();
-  std::uint8_t* const pnear = cs.pair_near.data();
+  std::int32_t* const scratch = cs.near_scratch.data();
   const Vec3* const x_ = m.x.data();
 #pragma omp parallel
   {
@@ -335,10 +336,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     std::int64_t count = 0, tests = 0;
     for (std::int64_t p = lo; p < hi; ++p) {
       bool near = kf_[p] >= 0;
-      if (!near && sleep && drift_all < gwake[p]) {  // (most pairs: asleep on drift_all)
-        pnear[p] = 0;
-        continue;
-      }
+      if (!near && sleep && drift_all < gwake[p]) continue;  // (most pairs: asleep on drift_all)
       const std::int32_t n = node_[p], j = cb_[p];
       // (a pair found outside the sphere by delta sleeps until the drift bound has grown by
       // delta: it cannot have come near before, and it would only be found outside again)
@@ -365,8 +363,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       const double slack = near ? -1.0 : pwake[p] - (drift[n] + kSleepRate * cbd[2 * j + 1]);
       gwake[p] = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
-      pnear[p] = near;
-      count += near;
+      if (near) scratch[lo + count++] = static_cast<std::int32_t>(p);
     }
     cs.near_count[t + 1] = count;
 #pragma omp atomic
@@ -378,10 +375,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       for (std::int64_t k = 0; k < nt; ++k) cs.near_count[k + 1] += cs.near_count[k];
       cs.near.resize(static_cast<std::size_t>(cs.near_count[nt]));  // within its capacity
     }
-    std::int32_t* const out = cs.near.data();
-    std::int64_t o = cs.near_count[t];
-    for (std::int64_t p = lo; p < hi; ++p)
-      if (pnear[p]) out[o++] = static_cast<std::int32_t>(p);
+    // (each thread's near pairs, in order from the start of its range, to its offset: a copy
+    // of the few near pairs, not a second pass over all of them)
+    std::copy(scratch + lo, scratch + lo + count, cs.near.data() + cs.near_count[t]);
   }
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair
@@ -699,7 +695,7 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_block, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
-           cs.near, cs.near_group, cs.pair_near, cs.pair_off, cs.pair_wake, cs.node_drift,
+           cs.near, cs.near_group, cs.near_scratch, cs.pair_off, cs.pair_wake, cs.node_drift,
            cs.pair_gwake, cs.cb_pair_start, cs.cb_pair,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
            cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand) +

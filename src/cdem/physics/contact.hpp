@@ -130,10 +130,10 @@ struct ContactSet {
   // (the quick reject and the narrow phase); per block its index (-1: no pair)
   std::vector<std::int32_t> cblock, pair_cb, block_slot;
   std::vector<BlockPlanes> cb_geom;
-  // this step: the pairs that pass the quick reject (in pair order), per pair the flag, per
-  // node with near pairs the start of its run in `near` (+ end), per thread the counts
-  std::vector<std::int32_t> near, near_group;
-  std::vector<std::uint8_t> pair_near;
+  // this step: the pairs that pass the quick reject (in pair order), per node with near pairs
+  // the start of its run in `near` (+ end), per thread the counts; near_scratch (one slot per
+  // pair): each thread's near pairs at the start of its range of pairs, before the copy to `near`
+  std::vector<std::int32_t> near, near_group, near_scratch;
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
   // far pairs sleep (contact.cpp, kSleepRate): per node its path length since the last build,
   // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound

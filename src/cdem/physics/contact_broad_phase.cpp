@@ -301,7 +301,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.pair_margin.resize(npair);
   cs.pair_n.resize(npair);
   cs.pair_w.resize(npair);
-  cs.pair_near.assign(npair, 0);
+  cs.near_scratch.resize(npair);
   cs.pair_off.assign(npair, 0);
   cs.pair_wake.assign(npair, 0.0);  // every pair tested at the next step
   cs.node_drift.assign(m.n_nodes(), 0.0);

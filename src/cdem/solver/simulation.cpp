@@ -286,13 +286,9 @@ void Simulation::step(bool sample) {
   }
   // 9. the works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt, and their parts after t_n
   // (energy() takes those back out, see last_*_)
-  double step_explosive = 0;
-  last_explosive_ = 0;
-  for (std::size_t i = 0; i < applied_.node.size(); ++i) {
-    const Vec3 v1 = m_.v[applied_.node[i]];
-    step_explosive += dot(applied_.force[i], 0.5 * (applied_.v_old[i] + v1)) * dt_;
-    last_explosive_ += 0.5 * dt_ * dot(applied_.force[i], v1);
-  }
+  const double power_new = applied_.power_now(m_);
+  const double step_explosive = 0.5 * dt_ * (applied_.power_old + power_new);
+  last_explosive_ = 0.5 * dt_ * power_new;
   if (beta_max_ > 0) {  // serial sums in a fixed order: the same for any thread count
     double at_old = 0, at_new = 0;
     for (double p : sd_power_) at_old += p;
@@ -316,7 +312,8 @@ std::size_t Simulation::solver_bytes() const {
   std::size_t b = bytes(block_dissipated_) + bytes(ke_) + bytes(cke_) + bytes(vtx_dissipated_) +
                   bytes(vtx_ke_) + bytes(vtx_cke_) + bytes(vtx_reaction_) + bytes(vtx_con_) +
                   bytes(con_vertices_) + bytes(tie_flag_) + bytes(applied_.node) +
-                  bytes(applied_.force) + bytes(applied_.v_old);
+                  bytes(applied_.force) + bytes(applied_.pair_b) + bytes(applied_.pair_a) +
+                  bytes(applied_.pair_force);
   b += bytes(bc_.constraints) + bytes(bc_.loads) + bytes(bc_.tables) + bytes(bc_.work_nodes) +
        bytes(bc_.v_old) + bytes(bc_.node_load_offset) +
        bytes(bc_.node_load_entry) + bytes(bc_.load_force);
@@ -428,9 +425,7 @@ void Simulation::io_state(StateArchive& ar) {
   }
   ar.io("sim.bc_v_old", bc_.v_old);
   ar.io("sim.bc_load_force", bc_.load_force);
-  ar.io("sim.applied_node", applied_.node);
-  ar.io("sim.applied_force", applied_.force);
-  ar.io("sim.applied_v_old", applied_.v_old);
+  // (the step's applied loads are not state: each step lists its own before it uses them)
 }
 
 }  // namespace cdem

@@ -42,21 +42,44 @@ struct EnergyBalance {
 };
 
 // Forces applied by extra loads during a step, kept so that their work can be integrated with
-// the mid-step velocity: W += F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt.
+// the mid-step velocity: W += F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt. The half with v(n-1/2) is
+// summed as the loads are added (power_old); the step adds the half with v(n+1/2).
 struct AppliedLoads {
-  std::vector<std::int32_t> node;
-  std::vector<Vec3> force, v_old;
+  std::vector<std::int32_t> node;  // single loads: f on node
+  std::vector<Vec3> force;
+  std::vector<std::int32_t> pair_b, pair_a;  // pair loads: f on pair_b, -f on pair_a
+  std::vector<Vec3> pair_force;
+  double power_old = 0;  // sum of f . v(n-1/2) over the loads added this step
   void clear() {
     node.clear();
     force.clear();
-    v_old.clear();
+    pair_b.clear();
+    pair_a.clear();
+    pair_force.clear();
+    power_old = 0;
   }
   // Adds f to node n of the model and records it.
   void add(Model& m, std::int32_t n, Vec3 f) {
     m.f[n] += f;
     node.push_back(n);
     force.push_back(f);
-    v_old.push_back(m.v[n]);
+    power_old += dot(f, m.v[n]);
+  }
+  // Adds f to node b and -f to node a (a pressure pushing two faces apart) and records it once.
+  void add_pair(Model& m, std::int32_t b, std::int32_t a, Vec3 f) {
+    m.f[b] += f;
+    m.f[a] -= f;
+    pair_b.push_back(b);
+    pair_a.push_back(a);
+    pair_force.push_back(f);
+    power_old += dot(f, m.v[b] - m.v[a]);
+  }
+  // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
+  double power_now(const Model& m) const {
+    double p = 0;
+    for (std::size_t i = 0; i < node.size(); ++i) p += dot(force[i], m.v[node[i]]);
+    for (std::size_t i = 0; i < pair_b.size(); ++i) p += dot(pair_force[i], m.v[pair_b[i]] - m.v[pair_a[i]]);
+    return p;
   }
 };
 

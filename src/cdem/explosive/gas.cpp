@@ -156,6 +156,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
   for (std::size_t k = 0; k < nb; ++k) {
     GasBody& gs = g.bodies[k];
     if (gs.model == GasModel::Literal) continue;
+    const double burnt_before = gs.burnt;
     gs.burnt = gs.rho_w * g.burnt_volume[k];
     gs.v_cavity = std::max(g.cavity[k], 0.0);
     gs.v_cracks = g.scratch[2 * k];
@@ -167,7 +168,10 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       p = eos_pressure(eos[gs.eos], gs.rho_w / rho);
     }
     gs.m_cracks = rho * gs.v_cracks;
-    if (gs.v_prev > 0) gs.work += 0.5 * (p + gs.pressure) * (vol - gs.v_prev);
+    // The products' expansion work: the volume's growth less the volume the charge burnt this
+    // step brings (its products start at the explosive's density, doing no work to get there).
+    if (gs.v_prev > 0)
+      gs.work += 0.5 * (p + gs.pressure) * ((vol - gs.v_prev) - (gs.burnt - burnt_before) / gs.rho_w);
     gs.v_prev = vol;
     gs.pressure = p;
     if (gs.plug_length > 0 && !gs.plug_out && dt > 0) {

@@ -228,6 +228,10 @@ def fmt_ms(t):
     return f"{t * 1e3:.3f}"
 
 
+# The summary's energies (J), printed in MJ/m.
+ENERGY_KEYS = ("explosive_work", "products_kinetic_energy", "explosive_work_to_rock")
+
+
 def table_text(res):
     lines = []
     print = lines.append  # noqa: A001 - the table is built line by line
@@ -269,7 +273,7 @@ def table_text(res):
             v = rr[n].get(k)
             if v is None:
                 vals.append("-")
-            elif k in ("explosive_work", "products_kinetic_energy", "explosive_work_to_rock"):
+            elif k in ENERGY_KEYS:
                 vals.append(f.format(v / 1e6))
             else:
                 vals.append(f.format(int(v)) if f == "{:d}" else f.format(v))

@@ -184,9 +184,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // rebuild at each cost most of its step.
   constexpr double kReleaseDrift = 0.1;
   // The nodes' motion this step, in one pass over the nodes that can take part in contact (a
-  // collapsed explosive block's nodes are free masses, often the fastest, and would trigger
-  // rebuilds for nothing): each node's path length since the build (the bound on how far it
-  // has moved, for the sleep) and the largest speed. A rebuild below starts both from 0 again.
+  // solid charge's explosive blocks are left out: their products, often the fastest nodes, would
+  // trigger rebuilds for nothing): each node's path length since the build (the bound on how far
+  // it has moved, for the sleep) and the largest speed. A rebuild below starts both from 0 again.
   const bool first_build = cs.released_seen < 0;
   const bool release_pending = !first_build && cs.released_seen != m.released_points;
   double vmax = 0;
@@ -307,9 +307,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         }
   // The near list: each thread lists the near pairs of a contiguous range of pairs at the start
   // of that range in a scratch array, then copies them to its offset, so the list is in pair
-  // order for any thread count. (The counts are
-  // sized for the thread count at the last build; a run's thread count may have grown since:
-  // thread_governor.hpp, or bench's 2-thread loop from a 1-thread set-up.)
+  // order for any thread count. (The counts are sized for the thread count at the last build; a
+  // run's thread count may have grown since: thread_governor.hpp, or bench's 2-thread loop from
+  // a 1-thread set-up.)
   if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.near_count.size() < want)
     cs.near_count.assign(want, 0);
   // A pair asleep by the test above with slack S (its wake bound less D_n + kSleepRate max_i D_i

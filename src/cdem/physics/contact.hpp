@@ -85,6 +85,8 @@ struct BlockPlanes {
 // tolerance of "on a face", and the edges on candidate faces (bit e).
 struct TetGeom {
   std::array<Vec3, 4> x, v, n, a0;
+  std::array<Vec3, 6> em;      // per edge its midpoint and its length (the edge pairs' first
+  std::array<double, 6> el;    // test, bounding spheres: computed once per block, not per pair)
   Vec3 c;
   double r = 0, tol = 0;
   double rho = 0;  // simplex_tolerance_reach
@@ -142,7 +144,8 @@ struct ContactSet {
   // and pairs sleep on one number: drift_all is the sum over the steps since the build of the
   // largest |v| dt of any node (no node's path length grew by more)
   double drift_all = 0;
-  std::vector<double> pair_gwake;  // per pair: the drift_all before which it is not tested again
+  std::vector<float> pair_gwake;   // per pair: the drift_all before which it is not tested again
+                                   // (rounded down: a float halves the step's streaming pass)
   // per candidate block, its pairs (CSR): woken when the block's tolerance reach is over the cap
   std::vector<std::int32_t> cb_pair_start, cb_pair;
   std::vector<std::int64_t> near_count;

@@ -306,7 +306,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.pair_wake.assign(npair, 0.0);  // every pair tested at the next step
   cs.node_drift.assign(m.n_nodes(), 0.0);
   cs.drift_all = 0;
-  cs.pair_gwake.assign(npair, 0.0);
+  cs.pair_gwake.assign(npair, 0.0f);
   cs.cb_pair_start.assign(cs.cblock.size() + 1, 0);
   for (std::size_t p = 0; p < npair; ++p) ++cs.cb_pair_start[cs.pair_cb[p] + 1];
   for (std::size_t j = 0; j < cs.cblock.size(); ++j) cs.cb_pair_start[j + 1] += cs.cb_pair_start[j];

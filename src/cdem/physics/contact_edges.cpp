@@ -71,6 +71,11 @@ void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g) 
     g.n[k] = normalized(cross(g.x[lf.f[k][1]] - a0, g.x[lf.f[k][2]] - a0));
   }
   g.rho = simplex_tolerance_reach(ElemType::Tet4, &m.x[n0], g.a0, g.n, g.tol);
+  for (int e = 0; e < 6; ++e) {
+    const Vec3 p0 = g.x[kTetEdges[e][0]], p1 = g.x[kTetEdges[e][1]];
+    g.em[e] = 0.5 * (p0 + p1);
+    g.el[e] = norm(p1 - p0);
+  }
   g.cand_edges = 0;
   for (int e = 0; e < 6; ++e)
     if (cs.face_cand[4 * b + kTetEdgeFaces[e][0]] || cs.face_cand[4 * b + kTetEdgeFaces[e][1]])
@@ -135,11 +140,11 @@ struct EdgeHit {
 bool edge_hit(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit& h) {
   const Vec3 p0 = A.x[kTetEdges[ea][0]], p1 = A.x[kTetEdges[ea][1]];
   const Vec3 q0 = B.x[kTetEdges[eb][0]], q1 = B.x[kTetEdges[eb][1]];
-  const Vec3 da = p1 - p0, db = q1 - q0;
-  // the two edges' bounding spheres
-  const Vec3 dm = 0.5 * (p0 + p1) - 0.5 * (q0 + q1);
-  const double reach = 0.5 * (norm(da) + norm(db)) + A.tol + B.tol;
+  // the two edges' bounding spheres (each edge's midpoint and length from its block's geometry)
+  const Vec3 dm = A.em[ea] - B.em[eb];
+  const double reach = 0.5 * (A.el[ea] + B.el[eb]) + A.tol + B.tol;
   if (dot(dm, dm) > reach * reach) return false;
+  const Vec3 da = p1 - p0, db = q1 - q0;
   const Vec3 r = p0 - q0;
   const double a = dot(da, da), e = dot(db, db), b = dot(da, db), c = dot(da, r), f = dot(db, r);
   const double den = a * e - b * b;

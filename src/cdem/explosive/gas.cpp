@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cdem/core/prefetch.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 
 namespace cdem {
@@ -92,6 +93,26 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
     return true;
   };
+  // (the interface k entries ahead in the list: its points' nodes and normal; `loads`: the nodes'
+  // forces and velocities for the loads, else their positions for the apertures. The list is in
+  // the order the interfaces opened, so each one's data is a cache line of its own.)
+  auto prefetch_ahead = [&](std::int64_t k, bool loads) {
+    const std::size_t i = iface_at(static_cast<std::size_t>(k));
+    prefetch_at(i, m.iface_normal.data());
+    if (!loads) prefetch_at(i * np, m.tied ? m.sp_tied.data() : m.sp_state.data());
+    for (int q = 0; q < np; ++q) {
+      const std::size_t s = i * np + q;
+      if (loads) {
+        prefetch_for_write_at(static_cast<std::size_t>(m.sp_b[s]), m.f.data());
+        prefetch_for_write_at(static_cast<std::size_t>(m.sp_a[s]), m.f.data());
+        prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.v.data());
+        prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.v.data());
+      } else {
+        prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.x.data());
+        prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.x.data());
+      }
+    }
+  };
   // 0. cracks: which listed interfaces are open and their apertures (the gathers of positions
   // are most of this function's cost): in parallel, each interface on its own, so the serial
   // passes below see the same values for any thread count
@@ -101,6 +122,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     const auto nl = static_cast<std::int64_t>(nlist);
 #pragma omp parallel for schedule(static)
     for (std::int64_t k = 0; k < nl; ++k) {
+      if (k + kPrefetchAhead < nl) prefetch_ahead(k + kPrefetchAhead, false);
       const std::size_t i = iface_at(static_cast<std::size_t>(k));
       const bool o = open(i);
       g.list_open[k] = o;
@@ -120,8 +142,17 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       g.front_speed[k] = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
     }
     for (std::size_t k = 0; k < nlist; ++k) {
+      if (k + kPrefetchAhead < nlist) {  // (the interface's own data; its blocks' below)
+        const std::size_t ia = iface_at(k + kPrefetchAhead);
+        prefetch_at(ia, m.iface_block_a.data(), m.iface_block_b.data(), g.iface_body.data(), m.sp_area.v.data());
+        prefetch_for_write_at(ia, g.iface_fill.data());
+      }
       if (!g.list_open[k]) continue;
       const std::size_t i = iface_at(k);
+      prefetch_at(static_cast<std::size_t>(m.iface_block_a[i]), g.block_body.data(), g.block_exterior.data(),
+                  m.block_size.data());
+      prefetch_at(static_cast<std::size_t>(m.iface_block_b[i]), g.block_body.data(), g.block_exterior.data(),
+                  m.block_size.data());
       const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
       std::int32_t d = g.iface_body[i];
       const double w = g.list_aperture[k];
@@ -206,6 +237,8 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       g.list_aperture[k] = p;
     }
     for (std::size_t k = 0; k < nlist; ++k) {
+      if (k + kPrefetchAhead < nlist && g.list_aperture[k + kPrefetchAhead] > 0)
+        prefetch_ahead(static_cast<std::int64_t>(k) + kPrefetchAhead, true);
       const double p = g.list_aperture[k];
       if (!(p > 0)) continue;
       const std::size_t i = iface_at(k);

@@ -7,6 +7,7 @@
 #include <limits>
 #include <numeric>
 
+#include "cdem/core/prefetch.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 
 namespace cdem {
@@ -140,20 +141,6 @@ constexpr double kSleepRate = 3.5;
 // A pair is not in contact once the node's projection is this far outside its contact face, in
 // barycentric coordinates (half the face: a node at a face's corner, or just past it, still is).
 constexpr double kOffFace = 0.5;
-
-// The near pairs are a sparse subset of the pairs (1 500 of 240 000 in the late SPEC 5.3 state):
-// each of their per-pair arrays is a cache line of its own. Their loops prefetch them kAhead
-// pairs ahead, and the data of their node and block half as far ahead (by then the pair's
-// node and block indices are in cache). Measured, not tuned: 8 and 16 ahead gave the same.
-constexpr std::int64_t kAhead = 8;
-template <class... T>
-inline void prefetch_at(std::size_t i, const T*... a) {
-  (__builtin_prefetch(a + i), ...);
-}
-template <class... T>
-inline void prefetch_for_write_at(std::size_t i, T*... a) {
-  (__builtin_prefetch(a + i, 1), ...);
-}
 
 // The tolerance reach of a simplex (contact.hpp): tol max_i |a_i - I| / r_in, with the incentre
 // I = sum_k A_k a_k / sum_k A_k (A_k the measure of the face opposite node k) and the inradius
@@ -360,13 +347,11 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     // written over the list's consumed head, in pair order.
     std::int64_t count = 0, tests = 0;
     for (std::int64_t i = 0; i < nawake; ++i) {
-      if (i + kAhead < nawake) {
-        const std::int32_t pa = scratch[lo + i + kAhead];
-        const char* gp = reinterpret_cast<const char*>(&geom[cb_[pa]]);
-        for (std::size_t off = 0; off < sizeof(BlockPlanes); off += 64) __builtin_prefetch(gp + off);
-        __builtin_prefetch(&x_[node_[pa]]);
-        __builtin_prefetch(&drift[node_[pa]]);
-        __builtin_prefetch(&pwake[pa]);
+      if (i + kPrefetchAhead < nawake) {
+        const std::int32_t pa = scratch[lo + i + kPrefetchAhead];
+        prefetch_object(geom[cb_[pa]]);
+        prefetch_at(static_cast<std::size_t>(node_[pa]), x_, drift);
+        prefetch_at(static_cast<std::size_t>(pa), pwake);
       }
       const std::int64_t p = scratch[lo + i];
       bool near = kf_[p] >= 0;
@@ -420,18 +405,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // (a') geometry of every near pair
 #pragma omp parallel for schedule(static)
   for (std::int64_t ii = 0; ii < nnear; ++ii) {
-    if (ii + 2 * kAhead < nnear) {
-      const auto q = static_cast<std::size_t>(cs.near[ii + 2 * kAhead]);
+    if (ii + 2 * kPrefetchAhead < nnear) {
+      const auto q = static_cast<std::size_t>(cs.near[ii + 2 * kPrefetchAhead]);
       prefetch_at(q, cs.pair_node.data(), cs.pair_block.data(), cs.pair_cb.data(), cs.pair_kf.data());
       prefetch_for_write_at(q, cs.pair_g.data(), cs.pair_n.data(), cs.pair_kf_now.data(), cs.pair_off.data(),
                             cs.pair_margin.data(), cs.pair_score.data(), cs.pair_w.data());
     }
-    if (ii + kAhead < nnear) {
-      const std::int32_t q = cs.near[ii + kAhead], bq = cs.pair_block[q];
+    if (ii + kPrefetchAhead < nnear) {
+      const std::int32_t q = cs.near[ii + kPrefetchAhead], bq = cs.pair_block[q];
       prefetch_at(static_cast<std::size_t>(cs.pair_node[q]), m.x.data(), m.v.data());
       prefetch_at(static_cast<std::size_t>(m.block_first_node[bq]), m.v.data(), m.x.data());
-      const char* gp = reinterpret_cast<const char*>(&cs.cb_geom[cs.pair_cb[q]]);
-      for (std::size_t off = 0; off < sizeof(BlockPlanes); off += 64) __builtin_prefetch(gp + off);
+      prefetch_object(cs.cb_geom[cs.pair_cb[q]]);
     }
     const std::int32_t p = cs.near[ii];
     const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
@@ -607,8 +591,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // (c) forces and state of the near pairs
 #pragma omp parallel for schedule(static) reduction(+ : active) reduction(max : pen_ratio)
   for (std::int64_t ii = 0; ii < nnear; ++ii) {
-    if (ii + kAhead < nnear) {
-      const auto q = static_cast<std::size_t>(cs.near[ii + kAhead]);
+    if (ii + kPrefetchAhead < nnear) {
+      const auto q = static_cast<std::size_t>(cs.near[ii + kPrefetchAhead]);
       prefetch_at(q, cs.pair_w.data(), cs.pair_g.data(), cs.pair_n.data(), cs.pair_margin.data(),
                   cs.pair_k.data(), cs.pair_kf_now.data());
       prefetch_for_write_at(q, cs.pair_force.data(), cs.pair_gap.data(), cs.pair_ft.data(), cs.pair_g0.data(),

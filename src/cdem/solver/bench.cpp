@@ -470,10 +470,22 @@ int run_bench(const BenchOptions& opt) {
     const std::int64_t want_broken =
         std::max<std::int64_t>(1, static_cast<std::int64_t>(opt.warmup_broken * nsp));
     const std::int64_t max_warm = (20LL * steps + 2000) * (opt.warmup_broken > 0.005 ? 10 : 1);
+    // (a late fraction can take many minutes: progress on stderr every 30 s, so that a long
+    // warm-up is not taken for a hang)
+    double report_at = warm0 + 30.0;
     while (warm_steps < max_warm) {
       sim.step();
       ++warm_steps;
       if (warm_steps % 10 == 0 && (broken0 = broken_springs(sim.model())) >= want_broken) break;
+      if (warm_steps % 10 == 0 && omp_get_wtime() > report_at) {
+        report_at += 30.0;
+        fmt::print(stderr,
+                   "bench: warm-up {} of at most {} steps, {:.1f} s: {:.2f} % of the spring points "
+                   "broken, {:.2f} % wanted\n",
+                   warm_steps, max_warm, omp_get_wtime() - warm0,
+                   100.0 * static_cast<double>(broken0) / nsp, 100.0 * opt.warmup_broken);
+        std::fflush(stderr);
+      }
     }
   }
   if (opt.fragmented) {

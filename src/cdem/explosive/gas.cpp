@@ -94,7 +94,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     return true;
   };
   // (the interface k entries ahead in the list: its points' nodes and normal; `loads`: the nodes'
-  // forces and velocities for the loads, else their positions for the apertures. The list is in
+  // velocities for the loads' power, else their positions for the apertures. The list is in
   // the order the interfaces opened, so each one's data is a cache line of its own.)
   auto prefetch_ahead = [&](std::int64_t k, bool loads) {
     const std::size_t i = iface_at(static_cast<std::size_t>(k));
@@ -103,8 +103,6 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     for (int q = 0; q < np; ++q) {
       const std::size_t s = i * np + q;
       if (loads) {
-        prefetch_for_write_at(static_cast<std::size_t>(m.sp_b[s]), m.f.data());
-        prefetch_for_write_at(static_cast<std::size_t>(m.sp_a[s]), m.f.data());
         prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.v.data());
         prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.v.data());
       } else {
@@ -236,15 +234,37 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       g.iface_gas_p[i] = static_cast<float>(p);
       g.list_aperture[k] = p;
     }
+    // the loads: their places in the record in list order (a prefix count), then each
+    // interface's loads written and their power terms formed in parallel, then the forces
+    // added and the terms summed in list order, serially (the same sums, in the same order, as
+    // adding them one by one: bitwise the same for any thread count)
+    g.load_first.resize(nlist + 1);  // (grows with the list of opened interfaces only)
+    std::int64_t nload = 0;
     for (std::size_t k = 0; k < nlist; ++k) {
-      if (k + kPrefetchAhead < nlist && g.list_aperture[k + kPrefetchAhead] > 0)
-        prefetch_ahead(static_cast<std::int64_t>(k) + kPrefetchAhead, true);
+      g.load_first[k] = nload;
+      if (g.list_aperture[k] > 0) nload += np;
+    }
+    g.load_first[nlist] = nload;
+    const std::size_t first = out.append_pairs(static_cast<std::size_t>(nload));
+    g.load_power.resize(static_cast<std::size_t>(nload));
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < nl; ++k) {
+      if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
+        prefetch_ahead(k + kPrefetchAhead, true);
       const double p = g.list_aperture[k];
       if (!(p > 0)) continue;
-      const std::size_t i = iface_at(k);
+      const std::size_t i = iface_at(static_cast<std::size_t>(k));
       const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
-      for (int q = 0; q < np; ++q) out.add_pair(m, m.sp_b[i * np + q], m.sp_a[i * np + q], f);
+      for (int q = 0; q < np; ++q) {
+        const auto r = static_cast<std::size_t>(g.load_first[k] + q);
+        const std::int32_t b = m.sp_b[i * np + q], a = m.sp_a[i * np + q];
+        out.pair_b[first + r] = b;
+        out.pair_a[first + r] = a;
+        out.pair_force[first + r] = f;
+        g.load_power[r] = dot(f, m.v[b] - m.v[a]);
+      }
     }
+    out.apply_pairs(m, first, static_cast<std::size_t>(nload), g.load_power.data());
   }
 }
 

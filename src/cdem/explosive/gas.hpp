@@ -83,6 +83,10 @@ struct GasField {
   std::vector<std::uint8_t> list_open;
   std::vector<double> list_aperture;  // (then, in the face-load pass, each one's gas pressure)
   std::vector<double> front_speed;    // this step, per body: the crack front's speed (m/s)
+  // this step, the crack-face loads: per list entry its first load (prefix count), per load its
+  // power term f . (v_b - v_a), both filled in parallel before the loads are applied in order
+  std::vector<std::int64_t> load_first;
+  std::vector<double> load_power;
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cdem/core/prefetch.hpp"
 #include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
@@ -73,6 +74,30 @@ struct AppliedLoads {
     pair_a.push_back(a);
     pair_force.push_back(f);
     power_old += dot(f, m.v[b] - m.v[a]);
+  }
+  // Room for n more pair loads, to be filled in parallel (pair_b, pair_a, pair_force at the
+  // returned index on) and then applied in order by apply_pairs: the same forces, sums and
+  // record as n calls of add_pair. Grows the record only beyond its capacity (as add_pair).
+  std::size_t append_pairs(std::size_t n) {
+    const std::size_t first = pair_b.size();
+    pair_b.resize(first + n);
+    pair_a.resize(first + n);
+    pair_force.resize(first + n);
+    return first;
+  }
+  // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
+  // (power[i] for load first + i): add_pair's sums in add_pair's order.
+  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t r = first + i;
+      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
+        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
+        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
+      }
+      m.f[pair_b[r]] += pair_force[r];
+      m.f[pair_a[r]] -= pair_force[r];
+      power_old += power[i];
+    }
   }
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
   double power_now(const Model& m) const {

@@ -140,17 +140,20 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       g.front_speed[k] = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
     }
     for (std::size_t k = 0; k < nlist; ++k) {
-      if (k + kPrefetchAhead < nlist) {  // (the interface's own data; its blocks' below)
-        const std::size_t ia = iface_at(k + kPrefetchAhead);
+      // (the interface's own data 2 x kPrefetchAhead entries ahead, its blocks' kPrefetchAhead)
+      if (k + 2 * kPrefetchAhead < nlist) {
+        const std::size_t ia = iface_at(k + 2 * kPrefetchAhead);
         prefetch_at(ia, m.iface_block_a.data(), m.iface_block_b.data(), g.iface_body.data(), m.sp_area.v.data());
         prefetch_for_write_at(ia, g.iface_fill.data());
       }
+      if (k + kPrefetchAhead < nlist) {
+        const std::size_t ia = iface_at(k + kPrefetchAhead);
+        for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
+          prefetch_at(static_cast<std::size_t>(blk), g.block_body.data(), g.block_exterior.data(),
+                      m.block_size.data());
+      }
       if (!g.list_open[k]) continue;
       const std::size_t i = iface_at(k);
-      prefetch_at(static_cast<std::size_t>(m.iface_block_a[i]), g.block_body.data(), g.block_exterior.data(),
-                  m.block_size.data());
-      prefetch_at(static_cast<std::size_t>(m.iface_block_b[i]), g.block_body.data(), g.block_exterior.data(),
-                  m.block_size.data());
       const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
       std::int32_t d = g.iface_body[i];
       const double w = g.list_aperture[k];
@@ -238,13 +241,12 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     // interface's loads written and their power terms formed in parallel, then the forces
     // added and the terms summed in list order, serially (the same sums, in the same order, as
     // adding them one by one: bitwise the same for any thread count)
-    g.load_first.resize(nlist + 1);  // (grows with the list of opened interfaces only)
+    g.load_first.resize(nlist);  // (grows with the list of opened interfaces only)
     std::int64_t nload = 0;
     for (std::size_t k = 0; k < nlist; ++k) {
       g.load_first[k] = nload;
       if (g.list_aperture[k] > 0) nload += np;
     }
-    g.load_first[nlist] = nload;
     const std::size_t first = out.append_pairs(static_cast<std::size_t>(nload));
     g.load_power.resize(static_cast<std::size_t>(nload));
 #pragma omp parallel for schedule(static)

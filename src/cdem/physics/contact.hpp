@@ -134,7 +134,8 @@ struct ContactSet {
   std::vector<BlockPlanes> cb_geom;
   // this step: the pairs that pass the quick reject (in pair order), per node with near pairs
   // the start of its run in `near` (+ end), per thread the counts; near_scratch (one slot per
-  // pair): each thread's near pairs at the start of its range of pairs, before the copy to `near`
+  // pair): each thread's awake pairs at the start of its range of pairs, overwritten by its near
+  // pairs as they are found, before the copy to `near`
   std::vector<std::int32_t> near, near_group, near_scratch;
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
   // far pairs sleep (contact.cpp, kSleepRate): per node its path length since the last build,

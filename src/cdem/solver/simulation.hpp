@@ -66,18 +66,9 @@ struct AppliedLoads {
     force.push_back(f);
     power_old += dot(f, m.v[n]);
   }
-  // Adds f to node b and -f to node a (a pressure pushing two faces apart) and records it once.
-  void add_pair(Model& m, std::int32_t b, std::int32_t a, Vec3 f) {
-    m.f[b] += f;
-    m.f[a] -= f;
-    pair_b.push_back(b);
-    pair_a.push_back(a);
-    pair_force.push_back(f);
-    power_old += dot(f, m.v[b] - m.v[a]);
-  }
-  // Room for n more pair loads, to be filled in parallel (pair_b, pair_a, pair_force at the
-  // returned index on) and then applied in order by apply_pairs: the same forces, sums and
-  // record as n calls of add_pair. Grows the record only beyond its capacity (as add_pair).
+  // Pair loads (a pressure pushing two faces apart: f on pair_b, -f on pair_a, recorded once):
+  // room for n more, filled in parallel (pair_b, pair_a, pair_force from the returned index
+  // on), then applied in order by apply_pairs. The record grows only beyond its capacity.
   std::size_t append_pairs(std::size_t n) {
     const std::size_t first = pair_b.size();
     pair_b.resize(first + n);
@@ -86,7 +77,7 @@ struct AppliedLoads {
     return first;
   }
   // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
-  // (power[i] for load first + i): add_pair's sums in add_pair's order.
+  // (power[i] for load first + i): the forces and power_old summed in the record's order.
   void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t r = first + i;

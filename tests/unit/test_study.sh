@@ -80,7 +80,11 @@ for g in rec.values():
     if not g["criteria"] or not g["rule"] or not g["decided_by"]:
         errors.append(f"{g['goal']}: criteria not stated")
 fh, ff = v["half"]["fly_rock"], v["full"]["fly_rock"]
-if not (ff["max_launch_speed_m_s"] > fh["max_launch_speed_m_s"]
+# (the throw as the recommendation measures it: the speed exceeded by the top share of the
+# fragments' volume, and the largest rise. The single fastest fragment is no measure of the
+# throw: on this 256-block mesh it is one small block of the collar, 346-355 m/s in both
+# variants, and which of the two has it changes with the last bits of a sum)
+if not (ff["quantile_launch_speed_m_s"] > fh["quantile_launch_speed_m_s"]
         and ff["max_vertical_displacement_m"] > fh["max_vertical_displacement_m"]):
     errors.append(f"the full charge does not throw more: {fh} {ff}")
 if abs(v["full"]["setup"]["charge_mass_kg"] - 2 * v["half"]["setup"]["charge_mass_kg"]) > 1e-9:

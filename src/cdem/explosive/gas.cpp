@@ -95,7 +95,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
   };
   // (the interface k entries ahead in the list: its points' nodes and normal; `loads`: the nodes'
   // velocities for the loads' power, else their positions for the apertures. The list is in
-  // the order the interfaces opened, so each one's data is a cache line of its own.)
+  // ascending order (order_active_ifaces), but sparse early in a blast and its nodes scattered.)
   auto prefetch_ahead = [&](std::int64_t k, bool loads) {
     const std::size_t i = iface_at(static_cast<std::size_t>(k));
     prefetch_at(i, m.iface_normal.data());

@@ -141,7 +141,10 @@ struct Model {
   std::vector<std::uint8_t> iface_check;      // 1: the interface has a tied point that can break
   std::vector<std::uint8_t> iface_active;     // 1: the interface has an untied point (its springs
                                               // are updated); listed in active_ifaces
-  std::vector<std::int32_t> active_ifaces;    // capacity n_ifaces, reserved at set-up
+  std::vector<std::int32_t> active_ifaces;    // capacity n_ifaces, reserved at set-up; ascending
+                                              // at the start of a step (order_active_ifaces)
+  std::vector<std::int32_t> active_merge;     // scratch of that merge (capacity n_ifaces)
+  std::size_t active_sorted = 0;              // leading entries of active_ifaces known ascending
   std::vector<std::uint8_t> block_active;     // 1: the block has an active interface (gather)
   std::vector<std::int32_t> vtx_scratch;      // set-up-sized work space of the cluster split
   std::vector<double> tie_reject;             // per interface material: the stress norm (Pa)

@@ -80,6 +80,8 @@ void build_ties(Model& m) {
   m.iface_active.assign(ni, 0);
   m.active_ifaces.clear();
   m.active_ifaces.reserve(ni);
+  m.active_merge.clear();
+  m.active_merge.reserve(ni);
   m.block_active.assign(nb, 0);
   for (std::size_t i = 0; i < ni; ++i) {
     const auto ii = static_cast<std::int32_t>(i);
@@ -91,6 +93,7 @@ void build_ties(Model& m) {
     }
     if (open) activate_interface(m, ii);
   }
+  m.active_sorted = m.active_ifaces.size();  // (activated in ascending order)
   // One motion per cluster: the mass-weighted mean velocity (momentum kept), the first node's
   // position (the nodes of a vertex start coincident).
   for (std::int32_t v = 0; v < nv; ++v) {
@@ -177,6 +180,20 @@ void activate_interface(Model& m, std::int32_t i) {
   m.block_active[m.iface_block_a[i]] = 1;
   m.block_active[m.iface_block_b[i]] = 1;
   m.iface_normal[i] = current_normal(m, i);
+}
+
+void order_active_ifaces(Model& m) {
+  auto& a = m.active_ifaces;
+  const std::size_t n = a.size(), head = std::min(m.active_sorted, n);
+  if (head == n) return;
+  std::sort(a.begin() + static_cast<std::ptrdiff_t>(head), a.end());
+  if (head > 0) {
+    m.active_merge.resize(n);  // within its capacity: no allocation
+    std::merge(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(head),
+               a.begin() + static_cast<std::ptrdiff_t>(head), a.end(), m.active_merge.begin());
+    a.swap(m.active_merge);
+  }
+  m.active_sorted = n;
 }
 
 void untie_point(Model& m, std::size_t s) {

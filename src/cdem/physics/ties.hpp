@@ -42,6 +42,14 @@ void untie_point(Model& m, std::size_t s);
 // spring forces) and sets its normal from the current positions.
 void activate_interface(Model& m, std::int32_t i);
 
+// Puts the active list back in ascending interface order: the interfaces activated since the last
+// call (appended in the order they failed, scattered over the model) sorted and merged into it.
+// The kernels that walk the list (spring_forces, the gas in the cracks) then read the interfaces'
+// arrays in ascending order instead of one cache line per interface. Allocates nothing (the
+// scratch is reserved at set-up); linear in the list's length when something was activated,
+// nothing otherwise. A list restored from a checkpoint (active_sorted 0) is sorted whole once.
+void order_active_ifaces(Model& m);
+
 // The stiffness of opened points. The blocks alone are stable up to dt_b = 2 / omega_max, with
 // omega_max^2 the largest element eigenvalue of M^-1 K over the elastic blocks (stable_step_tied,
 // time_step.hpp). Each node n gets a stiffness budget eta omega_max^2 m_n / 2 shared by the

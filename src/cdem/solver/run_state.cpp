@@ -42,6 +42,7 @@ void io_state(StateArchive& ar, Model& m) {
   ar.io("model.iface_check", m.iface_check);
   ar.io("model.iface_active", m.iface_active);
   ar.io("model.active_ifaces", m.active_ifaces);
+  if (ar.loading()) m.active_sorted = 0;  // (older checkpoints kept it in activation order)
   ar.io("model.block_active", m.block_active);
   ar.io("model.tie_reject", m.tie_reject);
 }

@@ -224,6 +224,8 @@ void Simulation::step(bool sample) {
     timer_->s[k] += now - clock;
     clock = now;
   };
+  // 0. tied mode: the interfaces activated since the last step merged into the ascending list
+  if (m_.tied) order_active_ifaces(m_);
   // 1. positions x(n) = x(n-1) + dt v(n-1/2)
   update_positions(m_, dt_);
   lap(kStepPositions);

@@ -20,7 +20,7 @@ constexpr char kMagic[8] = {'C', 'D', 'E', 'M', 'C', 'K', 'P', 'T'};
 constexpr char kTrailer[8] = {'C', 'K', 'P', 'T', 'E', 'N', 'D', '!'};
 // 2: energy.csv gained products_kinetic (a run continues its CSV files, so their layout is part
 // of the format).
-constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kVersion = 3;  // 3: blocks in Hilbert order (mesh_order.hpp)
 constexpr std::uint32_t kEndianMark = 0x01020304u;
 constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + 4;
 

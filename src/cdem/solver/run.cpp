@@ -25,6 +25,7 @@
 #include "cdem/io/run_writer.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/mesh/mesh_estimate.hpp"
+#include "cdem/mesh/mesh_order.hpp"
 #include "cdem/mesh/topology.hpp"
 #include "cdem/solver/run_dir.hpp"
 #include "cdem/solver/run_state.hpp"
@@ -35,10 +36,15 @@
 namespace cdem {
 
 Mesh load_mesh(const Case& c) {
-  if (c.mesh_file.empty()) return generate_mesh(*c.generate);  // sized before meshing
-  Mesh mesh = read_gmsh(c.mesh_file);
-  check_model_size(static_cast<double>(mesh.num_elements()), mesh.dim,
-                   fmt::format("mesh file '{}'", c.mesh_file), "");
+  Mesh mesh;
+  if (c.mesh_file.empty()) {
+    mesh = generate_mesh(*c.generate);  // sized before meshing
+  } else {
+    mesh = read_gmsh(c.mesh_file);
+    check_model_size(static_cast<double>(mesh.num_elements()), mesh.dim,
+                     fmt::format("mesh file '{}'", c.mesh_file), "");
+  }
+  order_mesh_spatially(mesh);  // blocks near in space near in memory (mesh_order.hpp)
   return mesh;
 }
 

@@ -132,38 +132,76 @@ bool inside(const TetGeom& g, const Vec3& p) {
   return true;
 }
 
-// The geometry of edge ea of A against edge eb of B: false when they cannot be in contact.
+// The geometry of an edge pair in contact: the weights s, t of the closest points on the pushed
+// edge and on the other, the depth d and the normal n along which the pushed edge is pushed.
 struct EdgeHit {
   double s = 0, t = 0, d = 0;
   Vec3 n;
 };
-bool edge_hit(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit& h) {
+// Edge ea of A against edge eb of B. A role "P's edge into Q": the two edges' bounding spheres
+// meet (each edge's midpoint and length from its block's geometry); the lines are not nearly
+// parallel (the vertices' contacts hold those); their closest points lie inside both segments;
+// the common normal, turned out of Q (along the sum of Q's two outward face normals at its
+// edge), points against the sum of P's (P's edge faces into Q there); P's point is inside Q, Q's inside P, and the
+// depth along the normal is positive. A's edge into B is tried first, then B's into A.
+// The second role's quantities are the first's with A and B swapped, and IEEE arithmetic gives
+// them exactly (x - y = -(y - x); products commute; the same sums in the same order): r' = -r,
+// c' = -f, f' = -c, den' = den, s' = t, t' = s, n' = -n before it is turned, pa' = pb, pb' = pa.
+// So the lines' closest points are computed once, for both. Only the sphere reach and the
+// parallel threshold are summed in another order, so each role has its own: the results are
+// bit for bit those of testing the two roles one after the other (as before 4 Dec 2026).
+// Returns 0 (no contact), 1 (A's edge pushed along +n) or 2 (B's).
+int edge_hit_either(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit& h) {
   const Vec3 p0 = A.x[kTetEdges[ea][0]], p1 = A.x[kTetEdges[ea][1]];
   const Vec3 q0 = B.x[kTetEdges[eb][0]], q1 = B.x[kTetEdges[eb][1]];
-  // the two edges' bounding spheres (each edge's midpoint and length from its block's geometry)
   const Vec3 dm = A.em[ea] - B.em[eb];
-  const double reach = 0.5 * (A.el[ea] + B.el[eb]) + A.tol + B.tol;
-  if (dot(dm, dm) > reach * reach) return false;
+  const double dm2 = dot(dm, dm);
+  const double reach_ab = 0.5 * (A.el[ea] + B.el[eb]) + A.tol + B.tol;
+  const double reach_ba = 0.5 * (B.el[eb] + A.el[ea]) + B.tol + A.tol;
+  const bool near_ab = !(dm2 > reach_ab * reach_ab), near_ba = !(dm2 > reach_ba * reach_ba);
+  if (!near_ab && !near_ba) return 0;
   const Vec3 da = p1 - p0, db = q1 - q0;
   const Vec3 r = p0 - q0;
   const double a = dot(da, da), e = dot(db, db), b = dot(da, db), c = dot(da, r), f = dot(db, r);
   const double den = a * e - b * b;
-  if (!(den > 1e-6 * a * e)) return false;  // (nearly) parallel: the vertices' contacts hold them
+  const bool ok_ab = near_ab && den > 1e-6 * a * e;  // (not nearly parallel)
+  const bool ok_ba = near_ba && den > 1e-6 * e * a;
+  if (!ok_ab && !ok_ba) return 0;
   const double s = (b * f - c * e) / den, t = (a * f - b * c) / den;
-  if (!(s > 0.01 && s < 0.99 && t > 0.01 && t < 0.99)) return false;
-  Vec3 n = normalized(cross(da, db));
-  const Vec3 mb = B.n[kTetEdgeFaces[eb][0]] + B.n[kTetEdgeFaces[eb][1]];
-  if (dot(n, mb) < 0) n = -1.0 * n;
+  if (!(s > 0.01 && s < 0.99 && t > 0.01 && t < 0.99)) return 0;
+  const Vec3 n0 = normalized(cross(da, db));
   const Vec3 ma = A.n[kTetEdgeFaces[ea][0]] + A.n[kTetEdgeFaces[ea][1]];
-  if (!(dot(n, ma) < 0)) return false;  // A's edge does not face into B here
+  const Vec3 mb = B.n[kTetEdgeFaces[eb][0]] + B.n[kTetEdgeFaces[eb][1]];
   const Vec3 pa = p0 + s * da, pb = q0 + t * db;
-  const double d = dot(pb - pa, n);
-  if (!(d > 0) || !inside(B, pa) || !inside(A, pb)) return false;
-  h.s = s;
-  h.t = t;
-  h.d = d;
-  h.n = n;
-  return true;
+  if (ok_ab) {  // A's edge into B
+    Vec3 n = n0;
+    if (dot(n, mb) < 0) n = -1.0 * n;
+    if (dot(n, ma) < 0) {
+      const double d = dot(pb - pa, n);
+      if (d > 0 && inside(B, pa) && inside(A, pb)) {
+        h.s = s;
+        h.t = t;
+        h.d = d;
+        h.n = n;
+        return 1;
+      }
+    }
+  }
+  if (ok_ba) {  // B's edge into A
+    Vec3 n = -1.0 * n0;
+    if (dot(n, ma) < 0) n = -1.0 * n;
+    if (dot(n, mb) < 0) {
+      const double d = dot(pa - pb, n);
+      if (d > 0 && inside(A, pb) && inside(B, pa)) {
+        h.s = t;
+        h.t = s;
+        h.d = d;
+        h.n = n;
+        return 2;
+      }
+    }
+  }
+  return 0;
 }
 
 inline std::int32_t edge_key(int ea, int eb) { return 6 * ea + eb; }
@@ -386,10 +424,9 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
         EdgeHit h;
-        bool hit = near && cand && edge_hit(A, ea, B, eb, h);
-        // a is the block whose edge is pushed along +n: try both roles (the edge pair in
-        // contact either way round is one contact: A's edge into B or B's into A)
-        if (!hit && near && cand) hit = edge_hit(B, eb, A, ea, h);
+        // both roles (the edge pair in contact either way round is one contact: A's edge into
+        // B or B's into A)
+        const bool hit = near && cand && edge_hit_either(A, ea, B, eb, h) != 0;
         if (hit || find_prev(cs, plo, phi, edge_key(ea, eb)) >= 0) ++count;
       }
     cs.bp_count[j + 1] = count;
@@ -419,12 +456,11 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
         EdgeHit h;
-        bool a_pushed = true;  // the edge pushed along +n is a's (else b's)
-        bool hit = near && cand && edge_hit(A, ea, B, eb, h);
-        if (!hit && near && cand) {
-          hit = edge_hit(B, eb, A, ea, h);
-          a_pushed = false;
-        }
+        const int role = near && cand ? edge_hit_either(A, ea, B, eb, h) : 0;
+        const bool hit = role != 0;
+        // the edge pushed along +n is a's (else b's); without a hit, a's unless both roles were
+        // tried (which side a kept contact's weights are read from)
+        const bool a_pushed = role == 1 || !(near && cand);
         const std::int32_t key = edge_key(ea, eb);
         const std::int64_t q = find_prev(cs, plo, phi, key);
         if (!hit && q < 0) continue;

@@ -173,34 +173,22 @@ int edge_hit_either(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit&
   const Vec3 ma = A.n[kTetEdgeFaces[ea][0]] + A.n[kTetEdgeFaces[ea][1]];
   const Vec3 mb = B.n[kTetEdgeFaces[eb][0]] + B.n[kTetEdgeFaces[eb][1]];
   const Vec3 pa = p0 + s * da, pb = q0 + t * db;
-  if (ok_ab) {  // A's edge into B
-    Vec3 n = n0;
-    if (dot(n, mb) < 0) n = -1.0 * n;
-    if (dot(n, ma) < 0) {
-      const double d = dot(pb - pa, n);
-      if (d > 0 && inside(B, pa) && inside(A, pb)) {
-        h.s = s;
-        h.t = t;
-        h.d = d;
-        h.n = n;
-        return 1;
-      }
-    }
-  }
-  if (ok_ba) {  // B's edge into A
-    Vec3 n = -1.0 * n0;
-    if (dot(n, ma) < 0) n = -1.0 * n;
-    if (dot(n, mb) < 0) {
-      const double d = dot(pa - pb, n);
-      if (d > 0 && inside(A, pb) && inside(B, pa)) {
-        h.s = t;
-        h.t = s;
-        h.d = d;
-        h.n = n;
-        return 2;
-      }
-    }
-  }
+  // one role, P's edge into Q: xp, xq the closest points on P's and Q's edges, sp, sq their
+  // weights, mp, mq the sums of P's and Q's face normals at their edges
+  auto role = [&](Vec3 n, const TetGeom& P, const TetGeom& Q, Vec3 xp, Vec3 xq, double sp, double sq,
+                  Vec3 mp, Vec3 mq) {
+    if (dot(n, mq) < 0) n = -1.0 * n;
+    if (!(dot(n, mp) < 0)) return false;
+    const double d = dot(xq - xp, n);
+    if (!(d > 0) || !inside(Q, xp) || !inside(P, xq)) return false;
+    h.s = sp;
+    h.t = sq;
+    h.d = d;
+    h.n = n;
+    return true;
+  };
+  if (ok_ab && role(n0, A, B, pa, pb, s, t, ma, mb)) return 1;
+  if (ok_ba && role(-1.0 * n0, B, A, pb, pa, t, s, mb, ma)) return 2;
   return 0;
 }
 

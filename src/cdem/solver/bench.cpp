@@ -228,6 +228,7 @@ std::size_t model_bytes(const Model& m) {
   // the tied mode's clusters and lists
   b += bytes_of(m.sp_tied) + bytes_of(m.vtx_offset) + bytes_of(m.vtx_nodes) + bytes_of(m.vtx_run) +
        bytes_of(m.iface_check) + bytes_of(m.iface_active) + bytes_of(m.active_ifaces) +
+       bytes_of(m.active_merge) +
        bytes_of(m.block_active) + bytes_of(m.vtx_scratch) + bytes_of(m.tie_reject) +
        bytes_of(m.mat_lambda) + bytes_of(m.mat_shear);
   b += bytes_of(m.block_materials) + bytes_of(m.iface_materials) + bytes_of(m.spring_laws) +

@@ -42,7 +42,6 @@ void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>&
   g.iface_fill.assign(m.n_ifaces(), 0.0f);
   g.iface_gas_p.assign(m.n_ifaces(), 0.0f);
   g.iface_body.assign(m.n_ifaces(), -1);
-  g.iface_load.assign(m.n_ifaces(), -1);
   g.block_body.assign(m.n_blocks(), -1);
   g.block_exterior.assign(m.n_blocks(), 0);
   std::vector<int> closed(m.n_blocks(), 0);  // boundary faces of the block in closed sets
@@ -69,57 +68,6 @@ void seed_gas(const Model& m, GasField& g, std::int32_t b, std::int32_t k, bool 
     if (g.block_body[other] < 0) g.block_body[other] = k;
   }
 }
-
-namespace {
-
-// The step's crack-face loads [first, ...) added to the nodes' forces per block, in parallel: a
-// node is its block's alone, and only its block's interfaces load it. Each node's loads are
-// added in the record's order, as AppliedLoads::apply_pairs adds them one load after another
-// (f on the B side's node, -f on the A side's): the same sums in the same order, bit for bit,
-// for any thread count, without a serial pass over the ~35 000 loads of a fragmented step.
-// False (nothing done) for blocks with more than 16 spring points (none of the element types).
-bool gather_face_loads(Model& m, const GasField& g, const AppliedLoads& out, std::size_t first) {
-  const int np = m.springs_per_iface;
-  constexpr int kMax = 16;  // spring points of one block: 4 faces x 3 (tet), 4 edges x 2 (quad)
-  if (4 * np > kMax) return false;
-  const auto nb = static_cast<std::int64_t>(m.n_blocks());
-#pragma omp parallel for schedule(static)
-  for (std::int64_t b = 0; b < nb; ++b) {
-    if (m.tied && !m.block_active[b]) continue;  // (none of its interfaces is listed)
-    std::int32_t rec[kMax], node[kMax];
-    bool minus[kMax];
-    int nc = 0;
-    for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
-      const std::int32_t code = m.block_iface_list[e];
-      const auto i = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
-      const std::int32_t l0 = g.iface_load[i];
-      if (l0 < 0) continue;
-      for (int q = 0; q < np && nc < kMax; ++q) {
-        const std::size_t s = i * np + q;
-        // (insertion in record order: at most 16 entries)
-        int at = nc++;
-        for (; at > 0 && rec[at - 1] > l0 + q; --at) {
-          rec[at] = rec[at - 1];
-          node[at] = node[at - 1];
-          minus[at] = minus[at - 1];
-        }
-        rec[at] = l0 + q;
-        minus[at] = code > 0;  // the block is the interface's A side: -f on its node
-        node[at] = code > 0 ? m.sp_a[s] : m.sp_b[s];
-      }
-    }
-    for (int k = 0; k < nc; ++k) {
-      const Vec3 f = out.pair_force[first + static_cast<std::size_t>(rec[k])];
-      if (minus[k])
-        m.f[node[k]] -= f;
-      else
-        m.f[node[k]] += f;
-    }
-  }
-  return true;
-}
-
-}  // namespace
 
 void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads& out, double dt) {
   const std::size_t nb = g.bodies.size();
@@ -291,9 +239,8 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
     // the loads: their places in the record in list order (a prefix count), then each
     // interface's loads written and their power terms formed in parallel, then the forces
-    // added per block in parallel, each node's in list order (gather_face_loads), and the terms
-    // summed in list order (the same sums, in the same order, as adding the loads one by one:
-    // bitwise the same for any thread count)
+    // added and the terms summed in list order, serially (the same sums, in the same order, as
+    // adding them one by one: bitwise the same for any thread count)
     g.load_first.resize(nlist);  // (grows with the list of opened interfaces only)
     std::int64_t nload = 0;
     for (std::size_t k = 0; k < nlist; ++k) {
@@ -307,12 +254,8 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
         prefetch_ahead(k + kPrefetchAhead, true);
       const double p = g.list_aperture[k];
+      if (!(p > 0)) continue;
       const std::size_t i = iface_at(static_cast<std::size_t>(k));
-      if (!(p > 0)) {
-        g.iface_load[i] = -1;
-        continue;
-      }
-      g.iface_load[i] = static_cast<std::int32_t>(g.load_first[k]);
       const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
       for (int q = 0; q < np; ++q) {
         const auto r = static_cast<std::size_t>(g.load_first[k] + q);
@@ -323,8 +266,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         g.load_power[r] = dot(f, m.v[b] - m.v[a]);
       }
     }
-    if (!gather_face_loads(m, g, out, first)) out.apply_pairs(m, first, static_cast<std::size_t>(nload));
-    out.add_pair_power(static_cast<std::size_t>(nload), g.load_power.data());
+    out.apply_pairs(m, first, static_cast<std::size_t>(nload), g.load_power.data());
   }
 }
 

@@ -87,9 +87,6 @@ struct GasField {
   // power term f . (v_b - v_a), both filled in parallel before the loads are applied in order
   std::vector<std::int64_t> load_first;
   std::vector<double> load_power;
-  // this step, per interface: the place of its first crack-face load among the step's loads
-  // (-1: none), for the per-block gather of those loads
-  std::vector<std::int32_t> iface_load;
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;

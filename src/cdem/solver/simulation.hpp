@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "cdem/core/prefetch.hpp"
 #include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
@@ -67,9 +68,7 @@ struct AppliedLoads {
   }
   // Pair loads (a pressure pushing two faces apart: f on pair_b, -f on pair_a, recorded once):
   // room for n more, filled in parallel (pair_b, pair_a, pair_force from the returned index
-  // on), then added to the model's forces, by apply_pairs or by the caller in an order that
-  // gives each node the same sums (the gas: per block), and their power terms summed by
-  // add_pair_power. The record grows only beyond its capacity.
+  // on), then applied in order by apply_pairs. The record grows only beyond its capacity.
   std::size_t append_pairs(std::size_t n) {
     const std::size_t first = pair_b.size();
     pair_b.resize(first + n);
@@ -77,17 +76,19 @@ struct AppliedLoads {
     pair_force.resize(first + n);
     return first;
   }
-  // Adds the pair loads [first, first + n) to the model's forces, one after another.
-  void apply_pairs(Model& m, std::size_t first, std::size_t n) {
+  // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
+  // (power[i] for load first + i): the forces and power_old summed in the record's order.
+  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t r = first + i;
+      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
+        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
+        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
+      }
       m.f[pair_b[r]] += pair_force[r];
       m.f[pair_a[r]] -= pair_force[r];
+      power_old += power[i];
     }
-  }
-  // power_old += the pair loads' terms f . (v_b - v_a) (power[i] for the i-th of them), in order.
-  void add_pair_power(std::size_t n, const double* power) {
-    for (std::size_t i = 0; i < n; ++i) power_old += power[i];
   }
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
   double power_now(const Model& m) const {

@@ -1,4 +1,4 @@
-"""Unit tests of python/cdemblast/analyses/monitor_spread.py on synthetic monitor histories: the
+"""Unit tests of python/cdemblast/analyses/monitor_spread.py on synthetic run summaries: the
 points it adds, the monitors appended to a case, and the per-distance figures (ratios, points
 within 20 %, mirrored left / right ratios), each checked against values worked out by hand.
 
@@ -17,13 +17,10 @@ except ImportError:  # pragma: no cover
     tomllib = None
 
 
-def write_monitors(path, peaks):
-    """A monitors.csv whose monitor `name` rises linearly to peaks[name] (Pa) at 1 ms and falls."""
+def write_summary(path, peaks):
+    """A summary.json whose monitor `name` peaked at peaks[name] (Pa) at 1 ms."""
     with open(path, "w") as f:
-        f.write("time,monitor,von_mises\n")
-        for t, share in ((0.0, 0.0), (5e-4, 0.5), (1e-3, 1.0), (2e-3, 0.25)):
-            for name, p in peaks.items():
-                f.write(f"{t},{name},{share * p}\n")
+        json.dump({"monitors": {name: {"peak_von_mises": p, "time": 1e-3} for name, p in peaks.items()}}, f)
 
 
 class Points(unittest.TestCase):
@@ -51,7 +48,7 @@ class Analyse(unittest.TestCase):
             for c, p in (("bar", bar), ("solid", solid)):
                 dirs[c] = os.path.join(d, c)
                 os.makedirs(dirs[c])
-                write_monitors(os.path.join(dirs[c], "monitors.csv"), p)
+                write_summary(os.path.join(dirs[c], "summary.json"), p)
             r = ms.analyse(dirs, pts, {"m": 0.5})
             ms.plot(r, os.path.join(d, "s.png"), {"m_R_1750"})
             self.assertGreater(os.path.getsize(os.path.join(d, "s.png")), 10000)

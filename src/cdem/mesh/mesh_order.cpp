@@ -11,16 +11,14 @@ namespace {
 
 constexpr int kBits = 21;  // per axis: 3 x 21 = 63 bits
 
-// Grid coordinates of the points in the bounding box of `pts`, kBits bits per axis (an axis of
+// The Hilbert keys of `pts` on a grid of kBits bits per axis over their bounding box (an axis of
 // zero extent, as z in 2D, maps to 0; a non-finite coordinate, which the mesh checks reject
 // before this is reached, to 0 as well).
-template <class F>
-std::vector<std::uint64_t> keys_of(std::size_t n, F&& point) {
+std::vector<std::uint64_t> keys_of(const std::vector<Vec3>& pts) {
   Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
           std::numeric_limits<double>::infinity()};
   Vec3 hi = -1.0 * lo;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 p = point(i);
+  for (const Vec3& p : pts) {
     lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
     hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
   }
@@ -30,11 +28,9 @@ std::vector<std::uint64_t> keys_of(std::size_t n, F&& point) {
     if (!(s > 0)) return 0;  // (also NaN and an axis of zero extent)
     return static_cast<std::uint32_t>(std::min(top, std::floor(s * top)));
   };
-  std::vector<std::uint64_t> key(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 p = point(i);
-    key[i] = hilbert_key(grid(p.x, lo.x, hi.x), grid(p.y, lo.y, hi.y), grid(p.z, lo.z, hi.z));
-  }
+  std::vector<std::uint64_t> key(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    key[i] = hilbert_key(grid(pts[i].x, lo.x, hi.x), grid(pts[i].y, lo.y, hi.y), grid(pts[i].z, lo.z, hi.z));
   return key;
 }
 
@@ -89,7 +85,7 @@ void order_mesh_spatially(Mesh& mesh) {
   const std::size_t nv = mesh.vertices.size(), ne = mesh.num_elements();
   if (nv == 0 || ne == 0) return;
   // vertices
-  const std::vector<std::int32_t> vord = order_of(keys_of(nv, [&](std::size_t i) { return mesh.vertices[i]; }));
+  const std::vector<std::int32_t> vord = order_of(keys_of(mesh.vertices));
   std::vector<std::int32_t> vnew(nv);
   for (std::size_t k = 0; k < nv; ++k) vnew[static_cast<std::size_t>(vord[k])] = static_cast<std::int32_t>(k);
   permute(mesh.vertices, vord);
@@ -102,12 +98,13 @@ void order_mesh_spatially(Mesh& mesh) {
     for (auto& f : fs.facets)
       for (auto& v : f.v) v = renumber(v);
   // elements, by their centroids (in the new vertex numbers)
-  const std::vector<std::int32_t> eord = order_of(keys_of(ne, [&](std::size_t e) {
+  std::vector<Vec3> centroid(ne);
+  for (std::size_t e = 0; e < ne; ++e) {
     const int k = nodes_of(mesh.elem_type[e]);
-    Vec3 c{};
-    for (int j = 0; j < k; ++j) c += mesh.vertices[static_cast<std::size_t>(mesh.elem_vertices[e][j])];
-    return (1.0 / k) * c;
-  }));
+    for (int j = 0; j < k; ++j) centroid[e] += mesh.vertices[static_cast<std::size_t>(mesh.elem_vertices[e][j])];
+    centroid[e] = (1.0 / k) * centroid[e];
+  }
+  const std::vector<std::int32_t> eord = order_of(keys_of(centroid));
   permute(mesh.elem_type, eord);
   permute(mesh.elem_vertices, eord);
   permute(mesh.elem_region, eord);

@@ -220,9 +220,11 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
     due = moved != 0;
   }
-  if (due) rebuild_contact_pairs(m, cs);  // (every pair is tested this step: the wakes and drifts start at 0)
+  // (drift_all grows by the step's largest motion whether or not the pairs are rebuilt: the
+  // pairs that stay keep their wakes, contact_broad_phase.cpp)
+  cs.drift_all += vmax * dt;
+  if (due) rebuild_contact_pairs(m, cs);
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
-  if (!due) cs.drift_all += vmax * dt;
   if (npair == 0) {
     std::int64_t none = 0;
     double pen = 0;
@@ -733,7 +735,7 @@ double contact_dissipated(const ContactSet& cs) {
 std::size_t contact_bytes(const ContactSet& cs) {
   auto b = [](const auto&... v) { return ((v.capacity() * sizeof(v[0])) + ... + std::size_t{0}); };
   return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.pair_node,
-           cs.pair_block, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
+           cs.pair_block, cs.pair_node_prev, cs.pair_block_prev, cs.pair_from, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
            cs.near, cs.near_group, cs.near_scratch, cs.pair_off, cs.pair_wake, cs.node_drift,

@@ -110,6 +110,10 @@ struct ContactSet {
   std::vector<std::int32_t> cand_nodes;  // ascending
   std::vector<Vec3> x_build;             // per candidate node, at the last build
   std::vector<std::int32_t> pair_node, pair_block;
+  // the previous build's pairs (kept for their capacity: a rebuild lists the new pairs here and
+  // swaps) and, per new pair, its index among them (-1: a new pair), by which the pairs' state is
+  // carried over in place (carry_monotone)
+  std::vector<std::int32_t> pair_node_prev, pair_block_prev, pair_from;
   std::vector<double> pair_fn;           // N, >= 0
   std::vector<Vec3> pair_ft;             // tangential force on the node (N)
   std::vector<Vec3> pair_force;          // this step's force on the node (N)
@@ -138,11 +142,12 @@ struct ContactSet {
   // pairs as they are found, before the copy to `near`
   std::vector<std::int32_t> near, near_group, near_scratch;
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
-  // far pairs sleep (contact.cpp, kSleepRate): per node its path length since the last build,
+  // far pairs sleep (contact.cpp, kSleepRate): per node its path length (since the first build
+  // or the checkpoint loaded: a rebuild keeps it, and the wakes of the pairs that stay with it),
   // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
   // at which it is tested again
   std::vector<double> pair_wake, node_drift, cb_drift;
-  // and pairs sleep on one number: drift_all is the sum over the steps since the build of the
+  // and pairs sleep on one number: drift_all is the sum over the steps (as long) of the
   // largest |v| dt of any node (no node's path length grew by more)
   double drift_all = 0;
   std::vector<float> pair_gwake;   // per pair: the drift_all before which it is not tested again
@@ -228,6 +233,27 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs);
 // Rebuilds what is derived from the pairs (the distinct blocks, the step's work lists, their
 // capacities): at every rebuild, and after the pairs were loaded from a checkpoint.
 void index_pairs(const Model& m, ContactSet& cs);
+
+// The sleep started anew: every pair and block pair tested at the next step, the path lengths
+// from 0 (at the first build and after a checkpoint is loaded: the wakes are not stored).
+void reset_contact_sleep(const Model& m, ContactSet& cs);
+
+// v[p] = v[from[p]] for from[p] >= 0, else fresh, for p < from.size(), in place: valid when the
+// indices from[p] >= 0 increase strictly with p (a merge of two sorted lists). Moves to the left
+// are done first, in increasing p, then moves to the right in decreasing p: neither reads a slot
+// the other has written (contact_broad_phase.cpp).
+template <class T>
+void carry_monotone(std::vector<T>& v, const std::vector<std::int32_t>& from, const T& fresh) {
+  const std::size_t n = from.size();
+  if (v.size() < n) v.resize(n);
+  for (std::size_t p = 0; p < n; ++p)
+    if (from[p] >= 0 && static_cast<std::size_t>(from[p]) > p) v[p] = v[static_cast<std::size_t>(from[p])];
+  for (std::size_t p = n; p-- > 0;)
+    if (from[p] >= 0 && static_cast<std::size_t>(from[p]) < p) v[p] = v[static_cast<std::size_t>(from[p])];
+  for (std::size_t p = 0; p < n; ++p)
+    if (from[p] < 0) v[p] = fresh;
+  v.resize(n);
+}
 
 // Edge-to-edge contact (3D): the block pairs to test, from the pairs (at each rebuild and after
 // loading), and one step's forces added to m.f (its contacts counted into active, its largest

@@ -58,19 +58,12 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   const std::size_t nb = m.n_blocks(), ni = m.n_ifaces();
   const int np = m.springs_per_iface;
   ++cs.rebuilds;
-  // The previous pairs and their state, merged into the new list at the end.
-  std::vector<std::int32_t> old_node, old_face;
-  std::vector<double> old_fn, old_diss, old_gap, old_k, old_g0;
-  std::vector<Vec3> old_ft, old_force;
-  old_node.swap(cs.pair_node);
-  old_face.swap(cs.pair_block);
-  old_fn.swap(cs.pair_fn);
-  old_diss.swap(cs.pair_diss);
-  old_gap.swap(cs.pair_gap);
-  old_k.swap(cs.pair_k);
-  old_g0.swap(cs.pair_g0);
-  old_ft.swap(cs.pair_ft);
-  old_force.swap(cs.pair_force);
+  // The previous pairs: their state is carried over to the new list at the end, in place.
+  cs.pair_node.swap(cs.pair_node_prev);
+  cs.pair_block.swap(cs.pair_block_prev);
+  const std::vector<std::int32_t>& old_node = cs.pair_node_prev;
+  const std::vector<std::int32_t>& old_face = cs.pair_block_prev;
+  if (cs.node_drift.size() != m.n_nodes()) reset_contact_sleep(m, cs);  // (the first build)
   // 1. Bodies: blocks connected through points that are not released.
   cs.body.resize(nb);
   std::iota(cs.body.begin(), cs.body.end(), 0);
@@ -216,56 +209,57 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
         }
       }
     }
-    std::size_t total = 0;  // (reserved exactly: the capacity is the same for any thread count)
+    std::size_t total = 0;  // (grown exactly: the capacity is the same for any thread count)
     for (int t = 0; t < nt; ++t) total += t_node[t].size();
-    cs.pair_node.reserve(total);
-    cs.pair_block.reserve(total);
+    if (cs.pair_node.capacity() < total) {
+      std::vector<std::int32_t>().swap(cs.pair_node);
+      std::vector<std::int32_t>().swap(cs.pair_block);
+      cs.pair_node.reserve(total);
+      cs.pair_block.reserve(total);
+    }
     for (int t = 0; t < nt; ++t) {
       cs.pair_node.insert(cs.pair_node.end(), t_node[t].begin(), t_node[t].end());
       cs.pair_block.insert(cs.pair_block.end(), t_block[t].begin(), t_block[t].end());
     }
   }
-  // 6. Carry the state of the pairs that stay (both lists sorted by (node, block)); a pair that
-  // is dropped while holding elastic energy books it as dissipated (the balance stays closed).
+  // 6. Carry the state of the pairs that stay (both lists sorted by (node, block)): the merge
+  // gives each new pair its old index, by which every per-pair array is permuted in place (no
+  // second copy of the pairs' state). A pair that is dropped while holding elastic energy books it
+  // as dissipated (the balance stays closed). The pairs that stay keep their wakes: the sleep's
+  // bounds rest on the nodes' path lengths, which a rebuild does not reset, so a pair found far
+  // apart before the rebuild is not tested again at it (before 4 Dec 2026 every pair was, at the
+  // step after each rebuild: the same results, bit for bit, at the cost of a step that tested all).
   const std::size_t npair = cs.pair_node.size();
-  cs.pair_fn.assign(npair, 0.0);
-  cs.pair_diss.assign(npair, 0.0);
-  cs.pair_gap.assign(npair, 0.0);
-  cs.pair_g0.assign(npair, 0.0);
-  cs.pair_k.assign(npair, 0.0);
-  cs.pair_ft.assign(npair, Vec3{});
-  cs.pair_force.assign(npair, Vec3{});
-  cs.pair_w.assign(npair, {0.0, 0.0, 0.0, 0.0});
-  std::vector<std::int8_t> old_kf;
-  old_kf.swap(cs.pair_kf);
-  cs.pair_kf.assign(npair, -1);
   {
+    cs.pair_from.resize(npair);
     std::size_t o = 0;
     const std::size_t nold = old_node.size();
     auto older = [&](std::size_t a, std::size_t p) {
       return old_node[a] != cs.pair_node[p] ? old_node[a] < cs.pair_node[p] : old_face[a] < cs.pair_block[p];
     };
     auto drop = [&](std::size_t a) {
-      cs.diss_closed += old_diss[a];
-      if (old_k[a] > 0)
-        cs.diss_closed += 0.5 * old_k[a] * old_gap[a] * old_gap[a] +
-                          0.5 * dot(old_ft[a], old_ft[a]) / (cs.shear_ratio * old_k[a]);
+      cs.diss_closed += cs.pair_diss[a];
+      if (cs.pair_k[a] > 0)
+        cs.diss_closed += 0.5 * cs.pair_k[a] * cs.pair_gap[a] * cs.pair_gap[a] +
+                          0.5 * dot(cs.pair_ft[a], cs.pair_ft[a]) / (cs.shear_ratio * cs.pair_k[a]);
     };
     for (std::size_t p = 0; p < npair; ++p) {
       while (o < nold && older(o, p)) drop(o++);
-      if (o < nold && old_node[o] == cs.pair_node[p] && old_face[o] == cs.pair_block[p]) {
-        cs.pair_fn[p] = old_fn[o];
-        cs.pair_diss[p] = old_diss[o];
-        cs.pair_gap[p] = old_gap[o];
-        cs.pair_g0[p] = old_g0[o];
-        cs.pair_ft[p] = old_ft[o];
-        cs.pair_force[p] = old_force[o];
-        cs.pair_kf[p] = old_kf[o];
-        ++o;
-      }
+      const bool same = o < nold && old_node[o] == cs.pair_node[p] && old_face[o] == cs.pair_block[p];
+      cs.pair_from[p] = same ? static_cast<std::int32_t>(o++) : -1;
     }
     while (o < nold) drop(o++);
   }
+  carry_monotone(cs.pair_fn, cs.pair_from, 0.0);
+  carry_monotone(cs.pair_diss, cs.pair_from, 0.0);
+  carry_monotone(cs.pair_gap, cs.pair_from, 0.0);
+  carry_monotone(cs.pair_g0, cs.pair_from, 0.0);
+  carry_monotone(cs.pair_ft, cs.pair_from, Vec3{});
+  carry_monotone(cs.pair_force, cs.pair_from, Vec3{});
+  carry_monotone(cs.pair_kf, cs.pair_from, std::int8_t{-1});
+  carry_monotone(cs.pair_wake, cs.pair_from, 0.0);   // (a new pair is tested at the next step)
+  carry_monotone(cs.pair_gwake, cs.pair_from, 0.0f);
+  cs.pair_k.resize(npair);
   // The pair's stiffness: the smallest of the node's and the block nodes' budgets.
   for (std::size_t p = 0; p < npair; ++p) {
     const std::int32_t b = cs.pair_block[p];
@@ -277,6 +271,14 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   index_pairs(m, cs);
   cs.released_seen = m.released_points;
   cs.release_drift = 0;
+}
+
+void reset_contact_sleep(const Model& m, ContactSet& cs) {
+  cs.node_drift.assign(m.n_nodes(), 0.0);
+  cs.drift_all = 0;
+  std::fill(cs.pair_wake.begin(), cs.pair_wake.end(), 0.0);
+  std::fill(cs.pair_gwake.begin(), cs.pair_gwake.end(), 0.0f);
+  std::fill(cs.bp_wake.begin(), cs.bp_wake.end(), 0.0);
 }
 
 void index_pairs(const Model& m, ContactSet& cs) {
@@ -300,13 +302,11 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.pair_kf_now.resize(npair);
   cs.pair_margin.resize(npair);
   cs.pair_n.resize(npair);
-  cs.pair_w.resize(npair);
+  cs.pair_w.resize(npair);  // (written for the near pairs before they are read, each step)
   cs.near_scratch.resize(npair);
   cs.pair_off.assign(npair, 0);
-  cs.pair_wake.assign(npair, 0.0);  // every pair tested at the next step
-  cs.node_drift.assign(m.n_nodes(), 0.0);
-  cs.drift_all = 0;
-  cs.pair_gwake.assign(npair, 0.0f);
+  cs.pair_wake.resize(npair, 0.0);  // (a rebuild carried them over; after loading: reset_contact_sleep)
+  cs.pair_gwake.resize(npair, 0.0f);
   cs.cb_pair_start.assign(cs.cblock.size() + 1, 0);
   for (std::size_t p = 0; p < npair; ++p) ++cs.cb_pair_start[cs.pair_cb[p] + 1];
   for (std::size_t j = 0; j < cs.cblock.size(); ++j) cs.cb_pair_start[j + 1] += cs.cb_pair_start[j];

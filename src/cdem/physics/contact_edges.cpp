@@ -231,8 +231,13 @@ std::int64_t find_prev(const ContactSet& cs, std::int64_t lo, std::int64_t hi, s
 }  // namespace
 
 void index_edge_pairs(const Model& m, ContactSet& cs) {
-  cs.bp_a.clear();
-  cs.bp_b.clear();
+  // the previous block pairs and their wakes (the block pairs that stay keep them: their bounds
+  // rest on the nodes' path lengths, which a rebuild does not reset; contact_broad_phase.cpp)
+  std::vector<std::int32_t> old_a, old_b;
+  std::vector<double> old_wake;
+  old_a.swap(cs.bp_a);
+  old_b.swap(cs.bp_b);
+  old_wake.swap(cs.bp_wake);
   if (!cs.edges || m.dim != 3) return;
   // The block pairs (lo, hi) of the node pairs, ascending and distinct: a counting sort on lo
   // (linear; the node pairs are sorted by node, so each node's block follows from the last one
@@ -286,7 +291,12 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.eb_need.assign(neb, 0);
   cs.eb_geom.resize(neb);
   cs.eb_drift.assign(2 * neb, 0.0);
-  cs.bp_wake.assign(cs.bp_a.size(), 0.0);  // every block pair tested at the next step
+  cs.bp_wake.assign(cs.bp_a.size(), 0.0);  // a new block pair is tested at the next step
+  if (old_wake.size() == old_a.size())
+    for (std::size_t j = 0, o = 0; j < cs.bp_a.size(); ++j) {  // (both lists sorted by (a, b))
+      while (o < old_a.size() && (old_a[o] < cs.bp_a[j] || (old_a[o] == cs.bp_a[j] && old_b[o] < cs.bp_b[j]))) ++o;
+      if (o < old_a.size() && old_a[o] == cs.bp_a[j] && old_b[o] == cs.bp_b[j]) cs.bp_wake[j] = old_wake[o];
+    }
   cs.bp_count.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);

@@ -395,7 +395,10 @@ double Simulation::products_kinetic() const {
 void Simulation::io_state(StateArchive& ar) {
   cdem::io_state(ar, m_);
   cdem::io_state(ar, contact_);
-  if (ar.loading() && contact_.enabled) index_pairs(m_, contact_);
+  if (ar.loading() && contact_.enabled) {
+    index_pairs(m_, contact_);
+    reset_contact_sleep(m_, contact_);
+  }
   ar.io("sim.t", t_);
   ar.io("sim.dt", dt_);
   ar.io("sim.steps", steps_);

@@ -92,6 +92,20 @@ void fracture_energy(SpringPoint& sp, const SpringLaw& law, double dn, double t)
 
 }  // namespace
 
+// The elastic branch of the fracture-energy law (fracture_energy above) for an intact point
+// with its damage state (w, slip) and this step's F_n (with the offsets, kn (open - w)) and
+// |F_s|^2: true when the update would neither soften it in tension or in shear nor break it, so
+// that F_n and F_s are its whole result. The same decisions, in the same arithmetic, as
+// fracture_energy's (a NaN takes the elastic branch there too).
+inline bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2) {
+  const double dt_w = law.wc > 0 ? w / law.wc : (w > 0 ? 1.0 : 0.0);
+  const double ds_s = law.sc > 0 ? slip / law.sc : (slip > 0 ? 1.0 : 0.0);
+  const double dmg = std::max(dt_w, ds_s);
+  const double ft_now = (law.ft * area) * (1.0 - dmg);
+  const double tau = std::max(0.0, (law.c * area) * (1.0 - dmg) - fn * law.tan_phi);
+  return !(fn > ft_now) & !(std::sqrt(fs2) > tau) & (dmg < 1.0);
+}
+
 Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
                          double release_distance, Vec3 force_old) {
   if (sp.state == kReleased) return {};
@@ -208,11 +222,14 @@ inline int spring_interface(Model& m, std::int64_t i, double dt, double t, bool 
       // normal gap d_n around with the spinning interface.
       const Vec3 du = dt * (m.v[b] - m.v[a]) - dot(d, n) * dn_vec;
       const double off = g0 ? g0[s] : 0.0;
-      // Fast path: an intact spring point under a linear law (elastic, or Mohr-Coulomb before
-      // it breaks) stores energy without dissipating it, so only its forces are updated. Any
-      // other state (breaking now, broken, softening) takes the full update with the
-      // dissipation book-keeping.
-      if (state == kIntact && law.law != InterfaceLaw::FractureEnergy) {
+      // Fast path: an intact spring point on an elastic branch (the elastic law, Mohr-Coulomb
+      // before it breaks, the fracture-energy law while it neither softens nor breaks: its
+      // F_n = k_n (open - w) with its damage state unchanged) stores energy without dissipating
+      // it, so only its forces are updated. Any other state (breaking now, softening now,
+      // broken) takes the full update with the dissipation book-keeping. (Before 4 Dec 2026
+      // the fracture-energy law always took the full update: the same forces and state, bit for
+      // bit, and a dissipation that differed by the rounding of the elastic steps' work.)
+      if (state == kIntact) {
         Vec3 fs = m.sp_fs[s];
         const double fs_old2 = dot(fs, fs);
         fs -= dot(fs, n) * n;
@@ -220,11 +237,18 @@ inline int spring_interface(Model& m, std::int64_t i, double dt, double t, bool 
         // Rescale to the old magnitude: |F_s| / |F_s,proj| as one square root of the ratio.
         if (fs_proj2 > 0) fs *= std::sqrt(fs_old2 / fs_proj2);
         fs += ks * (du - dot(du, n) * n);
-        const double fn = kn * (dot(d, n) + off);
-        // |F_s| < tau, tested on the squares (tau > 0 first).
-        const double tau = law.c * area - fn * law.tan_phi;
-        const bool holds = law.law == InterfaceLaw::Elastic ||
-                           (fn < law.ft * area && tau > 0 && dot(fs, fs) < tau * tau);
+        bool holds;
+        double fn;
+        if (law.law == InterfaceLaw::FractureEnergy) {
+          fn = kn * (((dot(d, n) + off) - m.sp_dil[s]) - m.sp_w[s]);
+          holds = fe_elastic(law, area, m.sp_w[s], m.sp_slip[s], fn, dot(fs, fs));
+        } else {
+          fn = kn * (dot(d, n) + off);
+          // |F_s| < tau, tested on the squares (tau > 0 first).
+          const double tau = law.c * area - fn * law.tan_phi;
+          holds = law.law == InterfaceLaw::Elastic ||
+                  (fn < law.ft * area && tau > 0 && dot(fs, fs) < tau * tau);
+        }
         if (holds) {
           m.sp_fn[s] = fn;
           m.sp_fs[s] = fs;
@@ -272,9 +296,9 @@ constexpr int kChunk = 32;
 // results are bitwise the same), organised for SIMD over a chunk of kChunk interfaces:
 //  1. per interface (one SIMD lane each): gather the face nodes, the new normal, the spin
 //     n - n_old, the spring constants and the law's parameters into stack arrays;
-//  2. per spring point of the chunk (contiguous s): the fast path of an intact spring point
-//     under a linear law, as masked stores; a flag for the others (breaking now, broken,
-//     fracture-energy law);
+//  2. per spring point of the chunk (contiguous s): the fast path of an intact spring point on
+//     an elastic branch (a linear law, or the fracture-energy law neither softening nor
+//     breaking), as masked stores; a flag for the others (breaking or softening now, broken);
 //  3. the flagged ones, one at a time, through the full update.
 // The law of each interface is read per lane.
 // kList (tied mode): the chunk is entries i0 .. i0 + w - 1 of `list` (the active interfaces), not
@@ -297,6 +321,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   alignas(64) double fsx0[K], fsy0[K], fsz0[K];
   alignas(64) double dx[K], dy[K], dz[K], dvx[K], dvy[K], dvz[K];  // x_b - x_a, v_b - v_a
   alignas(64) double onx[K], ony[K], onz[K], rel_l[K], tphir_l[K];  // for broken spring points
+  alignas(64) double wc_l[K], sc_l[K];  // the fracture-energy law's w_c and s_c
   alignas(64) std::int64_t sidx[kList ? K : 1];  // kList: the spring point of each k
   alignas(64) int skip[kList ? K : 1];           // kList: a tied point
   // Component loads and stores (an aggregate Vec3 copy is not vectorised by GCC 12).
@@ -363,6 +388,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
     const double knl = m.sp_kn.v[i], ksl = m.sp_ks.v[i], al = m.sp_area.v[i];
     const SpringLaw& law = laws[mat[i]];
     const double ftl = law.ft, cl = law.c, tpl = law.tan_phi, tprl = law.tan_phi_r;
+    const double wcl = law.wc, scl = law.sc;
     const double rel = m.release_distance_factor * 0.5 *
                        (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
     const int kl = static_cast<int>(law.law);
@@ -375,6 +401,7 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
       kind_l[k] = kl;
       onx[k] = oxl; ony[k] = oyl; onz[k] = ozl;
       rel_l[k] = rel; tphir_l[k] = tprl;
+      wc_l[k] = wcl; sc_l[k] = scl;
     }
   }
   const double* g0 = kG0 ? m.sp_g0.data() : nullptr;
@@ -382,14 +409,24 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   double* diss_io = m.sp_dissipated.data();
   double* fs_io = reinterpret_cast<double*>(m.sp_fs.data());
   const std::uint8_t* state_in = m.sp_state.data();
+  // the fracture-energy state (read only here: a point that softens takes the full update)
+  const double* w_in = fe ? m.sp_w.data() : nullptr;
+  const double* slip_in = fe ? m.sp_slip.data() : nullptr;
+  const double* dil_in = fe ? m.sp_dil.data() : nullptr;
   std::int64_t s_begin = i0 * NP;
   constexpr int KL = kList ? K : 1;  // the chunk's copies (kList)
   alignas(64) double g0_c[KL], fn_c[KL], diss_c[KL], fs_c[3 * KL];
+  alignas(64) double w_c[KL], slip_c[KL], dil_c[KL];
   alignas(64) std::uint8_t state_c[KL];
   if constexpr (kList) {
     for (int k = 0; k < w * NP; ++k) {
       const std::int64_t s = sidx[k];
       if constexpr (kG0) g0_c[k] = m.sp_g0[s];
+      if (fe) {
+        w_c[k] = m.sp_w[s];
+        slip_c[k] = m.sp_slip[s];
+        dil_c[k] = m.sp_dil[s];
+      }
       fn_c[k] = fn_out[s];
       diss_c[k] = diss_io[s];
       fs_c[3 * k] = fs_io[3 * s];
@@ -402,13 +439,20 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
     diss_io = diss_c;
     fs_io = fs_c;
     state_in = state_c;
+    if (fe) {
+      w_in = w_c;
+      slip_in = slip_c;
+      dil_in = dil_c;
+    }
     s_begin = 0;
   }
   // The spring loop, with or without the broken-contact path: its square roots and divisions
   // cost about as much as the rest, so chunks without a broken spring point (most: cracks are
-  // local) skip it.
-  auto spring_loop = [&](auto with_broken) {
+  // local) skip it; and with or without the fracture-energy law's elastic branch (kFE: the
+  // model has that law).
+  auto spring_loop = [&](auto with_broken, auto with_fe) {
   constexpr bool kBroken = decltype(with_broken)::value;
+  constexpr bool kFE = decltype(with_fe)::value;
 #pragma omp simd
   for (int k = 0; k < w * NP; ++k) {
     const std::int64_t s = s_begin + k;
@@ -441,15 +485,32 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
     fx += ks * (dux - dun * n_x);
     fy += ks * (duy - dun * n_y);
     fz += ks * (duz - dun * n_z);
-    const double fn = kn_l[k] * (dn + off);
-    const double tau = c_l[k] * area_l[k] - fn * tphi_l[k];
+    const double fn_lin = kn_l[k] * (dn + off);
+    const double tau = c_l[k] * area_l[k] - fn_lin * tphi_l[k];
     const int kind = kind_l[k];
+    const double fs2 = fx * fx + fy * fy + fz * fz;
     // Non-short-circuit & and |: a && would put the loads behind branches (no vectorisation).
-    const bool holds =
-        (kind == static_cast<int>(InterfaceLaw::Elastic)) |
-        ((fn < ft_l[k] * area_l[k]) & (tau > 0) & (fx * fx + fy * fy + fz * fz < tau * tau));
-    const bool fast = (state == kIntact) &
-                      (kind != static_cast<int>(InterfaceLaw::FractureEnergy)) & holds & !tied;
+    bool holds = (kind == static_cast<int>(InterfaceLaw::Elastic)) |
+                 ((fn_lin < ft_l[k] * area_l[k]) & (tau > 0) & (fs2 < tau * tau));
+    double fn = fn_lin;
+    bool fe_ok = kind != static_cast<int>(InterfaceLaw::FractureEnergy);
+    if constexpr (kFE) {
+      // the fracture-energy law's elastic branch: fe_elastic, the same expressions
+      const double wv = w_in[s], slv = slip_in[s];
+      const double fn_fe = kn_l[k] * (((dn + off) - dil_in[s]) - wv);
+      const double wc = wc_l[k], sc = sc_l[k];
+      const double dt_w = wc > 0 ? wv / wc : (wv > 0 ? 1.0 : 0.0);
+      const double ds_s = sc > 0 ? slv / sc : (slv > 0 ? 1.0 : 0.0);
+      const double dmg = std::max(dt_w, ds_s);
+      const double ft_now = (ft_l[k] * area_l[k]) * (1.0 - dmg);
+      const double tau_fe = std::max(0.0, (c_l[k] * area_l[k]) * (1.0 - dmg) - fn_fe * tphi_l[k]);
+      const bool holds_fe = !(fn_fe > ft_now) & !(std::sqrt(fs2) > tau_fe) & (dmg < 1.0);
+      const bool is_fe = !fe_ok;
+      holds = is_fe ? holds_fe : holds;
+      fn = is_fe ? fn_fe : fn_lin;
+      fe_ok = true;
+    }
+    const bool fast = (state == kIntact) & fe_ok & holds & !tied;
     bool broken = false;
     double fnb = 0, bsc = 1, diss = 0;
     if constexpr (kBroken) {
@@ -498,10 +559,17 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   };
   bool any_broken = false;
   for (int k = 0; k < w * NP; ++k) any_broken |= state_in[s_begin + k] == kBroken;
-  if (any_broken)
-    spring_loop(std::true_type{});
-  else
-    spring_loop(std::false_type{});
+  if (fe) {
+    if (any_broken)
+      spring_loop(std::true_type{}, std::true_type{});
+    else
+      spring_loop(std::false_type{}, std::true_type{});
+  } else {
+    if (any_broken)
+      spring_loop(std::true_type{}, std::false_type{});
+    else
+      spring_loop(std::false_type{}, std::false_type{});
+  }
   if constexpr (kList)  // the chunk's copies back (unchanged values where nothing was written)
     for (int k = 0; k < w * NP; ++k) {
       const std::int64_t s = sidx[k];

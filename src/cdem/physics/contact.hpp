@@ -205,7 +205,11 @@ struct ContactSet {
   // sleep's saving is these against the pairs' count times the steps
   std::int64_t pair_tests = 0, block_pair_tests = 0;
   double max_pen_ratio = 0;              // max over the run of penetration / face block size
-  std::size_t pair_capacity() const { return pair_node.capacity(); }
+  // the pair buffers' size: the most pairs any build has listed (each of the two lists, this
+  // build's and the previous one's, is grown to it when it is short; a checkpoint keeps it, so
+  // a restarted run reports what an uninterrupted one does)
+  std::size_t pairs_high = 0;
+  std::size_t pair_capacity() const { return pairs_high; }
 };
 
 // The tolerance reach of a simplex block (Tet4, Tri3) with nodes x, face planes (a0, outward unit

@@ -209,13 +209,14 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
         }
       }
     }
-    std::size_t total = 0;  // (grown exactly: the capacity is the same for any thread count)
+    std::size_t total = 0;  // (the same for any thread count, and so the buffers' size)
     for (int t = 0; t < nt; ++t) total += t_node[t].size();
+    cs.pairs_high = std::max(cs.pairs_high, total);
     if (cs.pair_node.capacity() < total) {
       std::vector<std::int32_t>().swap(cs.pair_node);
       std::vector<std::int32_t>().swap(cs.pair_block);
-      cs.pair_node.reserve(total);
-      cs.pair_block.reserve(total);
+      cs.pair_node.reserve(cs.pairs_high);
+      cs.pair_block.reserve(cs.pairs_high);
     }
     for (int t = 0; t < nt; ++t) {
       cs.pair_node.insert(cs.pair_node.end(), t_node[t].begin(), t_node[t].end());

@@ -95,11 +95,11 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   // (the lists derived from the pairs and the step's per-pair geometry, recomputed before it is
   // read, are not stored: index_pairs sizes them after loading, Simulation::io_state)
   // the pair buffers' size (grown at rebuilds only; summary.json reports it)
-  std::uint64_t cap = cs.pair_node.capacity();
+  std::uint64_t cap = cs.pairs_high;
   ar.io("contact.pair_capacity", cap);
   if (ar.loading()) {
-    const auto n = static_cast<std::size_t>(cap);
-    for (auto* v : {&cs.pair_node, &cs.pair_block}) v->reserve(n);
+    cs.pairs_high = static_cast<std::size_t>(cap);
+    for (auto* v : {&cs.pair_node, &cs.pair_block}) v->reserve(cs.pairs_high);
   }
 }
 

@@ -229,7 +229,9 @@ inline int spring_interface(Model& m, std::int64_t i, double dt, double t, bool 
       // broken) takes the full update with the dissipation book-keeping. (Before 4 Dec 2026
       // the fracture-energy law always took the full update: the same forces and state, bit for
       // bit, and a dissipation that differed by the rounding of the elastic steps' work.)
-      if (state == kIntact) {
+      // (the tied mode's fracture-energy points always take the full update: they are untied at
+      // their peak strength, so nearly all soften; spring_chunk)
+      if (state == kIntact && !(kTied && law.law == InterfaceLaw::FractureEnergy)) {
         Vec3 fs = m.sp_fs[s];
         const double fs_old2 = dot(fs, fs);
         fs -= dot(fs, n) * n;
@@ -414,19 +416,25 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   const double* slip_in = fe ? m.sp_slip.data() : nullptr;
   const double* dil_in = fe ? m.sp_dil.data() : nullptr;
   std::int64_t s_begin = i0 * NP;
+  // Does the chunk hold an intact fracture-energy point? Only then does the spring loop test
+  // the law's elastic branch: most chunks of a cracked model hold broken points only, and the
+  // test's loads, divisions and square root cost them more than it saves. Springs mode only:
+  // in the tied mode a fracture-energy point is untied at its peak strength and softens from
+  // there (tie_failure.hpp), so its intact points are nearly all softening, and the test cost
+  // the late SPEC 5.3 state's spring kernel 5-15 % (docs/performance.md): they take the full
+  // update, as spring_interface<true> does.
+  bool fe_intact = false;
+  if (fe && !kList)
+    for (int k = 0; k < w * NP; ++k)
+      fe_intact |= (kind_l[k] == static_cast<int>(InterfaceLaw::FractureEnergy)) &
+                   (state_in[s_begin + k] == kIntact);
   constexpr int KL = kList ? K : 1;  // the chunk's copies (kList)
   alignas(64) double g0_c[KL], fn_c[KL], diss_c[KL], fs_c[3 * KL];
-  alignas(64) double w_c[KL], slip_c[KL], dil_c[KL];
   alignas(64) std::uint8_t state_c[KL];
   if constexpr (kList) {
     for (int k = 0; k < w * NP; ++k) {
       const std::int64_t s = sidx[k];
       if constexpr (kG0) g0_c[k] = m.sp_g0[s];
-      if (fe) {
-        w_c[k] = m.sp_w[s];
-        slip_c[k] = m.sp_slip[s];
-        dil_c[k] = m.sp_dil[s];
-      }
       fn_c[k] = fn_out[s];
       diss_c[k] = diss_io[s];
       fs_c[3 * k] = fs_io[3 * s];
@@ -439,17 +447,12 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
     diss_io = diss_c;
     fs_io = fs_c;
     state_in = state_c;
-    if (fe) {
-      w_in = w_c;
-      slip_in = slip_c;
-      dil_in = dil_c;
-    }
     s_begin = 0;
   }
   // The spring loop, with or without the broken-contact path: its square roots and divisions
   // cost about as much as the rest, so chunks without a broken spring point (most: cracks are
   // local) skip it; and with or without the fracture-energy law's elastic branch (kFE: the
-  // model has that law).
+  // chunk has an intact point under that law, fe_intact above).
   auto spring_loop = [&](auto with_broken, auto with_fe) {
   constexpr bool kBroken = decltype(with_broken)::value;
   constexpr bool kFE = decltype(with_fe)::value;
@@ -559,12 +562,17 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   };
   bool any_broken = false;
   for (int k = 0; k < w * NP; ++k) any_broken |= state_in[s_begin + k] == kBroken;
-  if (fe) {
-    if (any_broken)
-      spring_loop(std::true_type{}, std::true_type{});
-    else
-      spring_loop(std::false_type{}, std::true_type{});
-  } else {
+  bool done_fe = false;
+  if constexpr (!kList) {
+    if (fe_intact) {
+      if (any_broken)
+        spring_loop(std::true_type{}, std::true_type{});
+      else
+        spring_loop(std::false_type{}, std::true_type{});
+      done_fe = true;
+    }
+  }
+  if (!done_fe) {
     if (any_broken)
       spring_loop(std::true_type{}, std::false_type{});
     else

@@ -92,12 +92,8 @@ void fracture_energy(SpringPoint& sp, const SpringLaw& law, double dn, double t)
 
 }  // namespace
 
-// The elastic branch of the fracture-energy law (fracture_energy above) for an intact point
-// with its damage state (w, slip) and this step's F_n (with the offsets, kn (open - w)) and
-// |F_s|^2: true when the update would neither soften it in tension or in shear nor break it, so
-// that F_n and F_s are its whole result. The same decisions, in the same arithmetic, as
-// fracture_energy's (a NaN takes the elastic branch there too).
-inline bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2) {
+// (springs.hpp) The same decisions, in the same arithmetic, as fracture_energy's above.
+bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2) {
   const double dt_w = law.wc > 0 ? w / law.wc : (w > 0 ? 1.0 : 0.0);
   const double ds_s = law.sc > 0 ? slip / law.sc : (slip > 0 ? 1.0 : 0.0);
   const double dmg = std::max(dt_w, ds_s);

@@ -50,6 +50,12 @@ struct SpringPoint {
 Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
                          double release_distance, Vec3 force_old);
 
+// The elastic branch of the fracture-energy law for an intact point with damage state (w,
+// slip), this step's F_n = k_n A_c (d_n + g0 - d_dil - w) and |F_s|^2 after the step's
+// increment: true when update_spring_point would neither soften it nor break it, so that F_n and
+// F_s are its whole result (the springs mode's fast path, springs.cpp; test_fe_elastic.cpp).
+bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2);
+
 // All spring points: sp_fn, sp_fs (the force on node a is spring_force). Parallel over
 // interfaces; vectorised over chunks of interfaces (springs.cpp) once the previous normals are
 // kept, with the same arithmetic as spring_forces_reference. Tied mode (Model::tied): the active

@@ -92,16 +92,6 @@ void fracture_energy(SpringPoint& sp, const SpringLaw& law, double dn, double t)
 
 }  // namespace
 
-// (springs.hpp) The same decisions, in the same arithmetic, as fracture_energy's above.
-bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2) {
-  const double dt_w = law.wc > 0 ? w / law.wc : (w > 0 ? 1.0 : 0.0);
-  const double ds_s = law.sc > 0 ? slip / law.sc : (slip > 0 ? 1.0 : 0.0);
-  const double dmg = std::max(dt_w, ds_s);
-  const double ft_now = (law.ft * area) * (1.0 - dmg);
-  const double tau = std::max(0.0, (law.c * area) * (1.0 - dmg) - fn * law.tan_phi);
-  return !(fn > ft_now) & !(std::sqrt(fs2) > tau) & (dmg < 1.0);
-}
-
 Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du, Vec3 n, double t,
                          double release_distance, Vec3 force_old) {
   if (sp.state == kReleased) return {};
@@ -494,16 +484,11 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
     double fn = fn_lin;
     bool fe_ok = kind != static_cast<int>(InterfaceLaw::FractureEnergy);
     if constexpr (kFE) {
-      // the fracture-energy law's elastic branch: fe_elastic, the same expressions
-      const double wv = w_in[s], slv = slip_in[s];
+      // the fracture-energy law's elastic branch (springs.hpp)
+      const double wv = w_in[s];
       const double fn_fe = kn_l[k] * (((dn + off) - dil_in[s]) - wv);
-      const double wc = wc_l[k], sc = sc_l[k];
-      const double dt_w = wc > 0 ? wv / wc : (wv > 0 ? 1.0 : 0.0);
-      const double ds_s = sc > 0 ? slv / sc : (slv > 0 ? 1.0 : 0.0);
-      const double dmg = std::max(dt_w, ds_s);
-      const double ft_now = (ft_l[k] * area_l[k]) * (1.0 - dmg);
-      const double tau_fe = std::max(0.0, (c_l[k] * area_l[k]) * (1.0 - dmg) - fn_fe * tphi_l[k]);
-      const bool holds_fe = !(fn_fe > ft_now) & !(std::sqrt(fs2) > tau_fe) & (dmg < 1.0);
+      const bool holds_fe = fe_elastic(wc_l[k], sc_l[k], ft_l[k] * area_l[k], c_l[k] * area_l[k],
+                                       tphi_l[k], wv, slip_in[s], fn_fe, fs2);
       const bool is_fe = !fe_ok;
       holds = is_fe ? holds_fe : holds;
       fn = is_fe ? fn_fe : fn_lin;
@@ -558,22 +543,16 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
   };
   bool any_broken = false;
   for (int k = 0; k < w * NP; ++k) any_broken |= state_in[s_begin + k] == kBroken;
-  bool done_fe = false;
-  if constexpr (!kList) {
-    if (fe_intact) {
-      if (any_broken)
-        spring_loop(std::true_type{}, std::true_type{});
-      else
-        spring_loop(std::false_type{}, std::true_type{});
-      done_fe = true;
-    }
-  }
-  if (!done_fe) {
+  auto run = [&](auto with_fe) {
     if (any_broken)
-      spring_loop(std::true_type{}, std::false_type{});
+      spring_loop(std::true_type{}, with_fe);
     else
-      spring_loop(std::false_type{}, std::false_type{});
-  }
+      spring_loop(std::false_type{}, with_fe);
+  };
+  if (fe_intact && !kList)  // (kList: the fracture-energy branch is not instantiated)
+    run(std::bool_constant<!kList>{});
+  else
+    run(std::false_type{});
   if constexpr (kList)  // the chunk's copies back (unchanged values where nothing was written)
     for (int k = 0; k < w * NP; ++k) {
       const std::int64_t s = sidx[k];

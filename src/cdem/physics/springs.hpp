@@ -26,6 +26,8 @@
 // so spring_forces skips that book-keeping on its fast path; the step in which it breaks
 // accounts for the released energy.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "cdem/model/model.hpp"
@@ -54,7 +56,20 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
 // slip), this step's F_n = k_n A_c (d_n + g0 - d_dil - w) and |F_s|^2 after the step's
 // increment: true when update_spring_point would neither soften it nor break it, so that F_n and
 // F_s are its whole result (the springs mode's fast path, springs.cpp; test_fe_elastic.cpp).
-bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2);
+// Its arithmetic on plain values (w_c, s_c, f_t A_c, c A_c, tan phi), for the vectorised loop
+// (called where multiply-add contraction is off: springs.cpp, test_fe_elastic.cpp).
+inline bool fe_elastic(double wc, double sc, double ftA, double cA, double tan_phi, double w,
+                       double slip, double fn, double fs2) {
+  const double dt_w = wc > 0 ? w / wc : (w > 0 ? 1.0 : 0.0);
+  const double ds_s = sc > 0 ? slip / sc : (slip > 0 ? 1.0 : 0.0);
+  const double dmg = std::max(dt_w, ds_s);
+  const double ft_now = ftA * (1.0 - dmg);
+  const double tau = std::max(0.0, cA * (1.0 - dmg) - fn * tan_phi);
+  return !(fn > ft_now) & !(std::sqrt(fs2) > tau) & (dmg < 1.0);
+}
+inline bool fe_elastic(const SpringLaw& law, double area, double w, double slip, double fn, double fs2) {
+  return fe_elastic(law.wc, law.sc, law.ft * area, law.c * area, law.tan_phi, w, slip, fn, fs2);
+}
 
 // All spring points: sp_fn, sp_fs (the force on node a is spring_force). Parallel over
 // interfaces; vectorised over chunks of interfaces (springs.cpp) once the previous normals are

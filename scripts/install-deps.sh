@@ -17,7 +17,7 @@ done
 PKGS=(
   cmake ninja-build g++ make pkg-config
   libgmsh-dev libeigen3-dev libtoml11-dev libcli11-dev libspdlog-dev libfmt-dev zlib1g-dev
-  libmetis-dev
+  libmetis-dev libopenmpi-dev openmpi-bin
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-numpy
   clang libclang-rt-14-dev

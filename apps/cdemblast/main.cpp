@@ -12,15 +12,18 @@
 
 #include <sys/wait.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <thread>
 
 #include "cdem/core/error.hpp"
 #include "cdem/explosive/charges.hpp"
 #include "cdem/analysis/monitors.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/parallel/partition.hpp"
+#include "cdem/parallel/ranks.hpp"
 #include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
 #include "cdem/physics/ties.hpp"
@@ -36,6 +39,16 @@ void print_partition(const cdem::PreparedCase& pc, int parts) {
   const cdem::BlockGraph g = cdem::block_graph(m, groups);
   const auto part = cdem::partition_kway(g, parts);
   const auto q = cdem::partition_quality(g, part, parts, groups);
+  // What `mpirun -np N cdemblast run` divides today (parallel/ranks.hpp): the block kernel, by
+  // contiguous ranges of the Hilbert order.
+  const auto r = cdem::partition_quality(g, cdem::ranges_to_parts(cdem::block_ranges(g, parts)), parts, groups);
+  fmt::print("ranks       mpirun -np {} divides the block kernel into Hilbert-order ranges: {} to {} "
+             "blocks, load imbalance {:.3f}, {} interfaces between ranks ({:.2f} %)\n",
+             parts, r.blocks_min, r.blocks_max, r.imbalance, r.edge_cut, 100 * r.edge_cut_share);
+  if (!cdem::have_metis()) {
+    fmt::print("partition   METIS: not in this build (install libmetis-dev)\n");
+    return;
+  }
   fmt::print("partition   {} parts (METIS k-way): {} to {} blocks, load imbalance {:.3f}, {} interfaces "
              "cut ({:.2f} %), ghost blocks {:.0f} (mean) / {} (max) per part, {:.1f} / {} neighbours, "
              "{:.3g} / {:.3g} kB exchanged per part per step; {} of the charges split\n",
@@ -165,11 +178,25 @@ int cmd_study(const std::string& file, const std::string& out, int threads, bool
   return run_python("CDEM_STUDY_SCRIPT", "cdem_study.py", args);
 }
 
-}  // namespace
+// An error message on stderr. On several ranks every rank usually meets the same error (the same
+// case): rank 0 says it; another rank says it, with its rank, only if it is still running a
+// second later (rank 0 did not meet it, and ends the others when it does: RankSession::finish).
+void print_error(const char* what) {
+  const cdem::RankInfo& rk = cdem::ranks();
+  if (rk.size > 1 && !rk.root()) {
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    fmt::print(stderr, "error: rank {}: {}\n", rk.rank, what);
+    return;
+  }
+  fmt::print(stderr, "error: {}\n", what);
+}
 
-int main(int argc, char** argv) {
+
+int cli_main(int argc, char** argv) {
   CLI::App app{"cdemblast: rock blasting with the continuous-discontinuous element method"};
-  app.set_version_flag("--version", std::string("cdemblast ") + CDEM_VERSION);
+  app.set_version_flag("--version", fmt::format("cdemblast {} (MPI: {}, METIS: {})", CDEM_VERSION,
+                                                cdem::have_mpi() ? "yes" : "no",
+                                                cdem::have_metis() ? "yes" : "no"));
   app.require_subcommand(1);
   std::string case_path, out_dir;
   int threads = 0;
@@ -294,6 +321,21 @@ int main(int argc, char** argv) {
   // stdout holds only what a command prints as its result (check's report).
   spdlog::set_default_logger(spdlog::stderr_color_mt("cdemblast"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
+  // Several ranks (mpirun -np N): `run` and `resume` step one model together; `check` is
+  // rank 0's (it prints the ranks' division); the other commands are one process's work.
+  const cdem::RankInfo& rk = cdem::ranks();
+  if (rk.size > 1) {
+    if (!rk.root()) spdlog::set_level(spdlog::level::off);  // rank 0 reports
+    if (*check) {
+      if (!rk.root()) return 0;
+      if (check_parts == 0) check_parts = rk.size;
+    } else if (!*run && !*resume) {
+      if (rk.root())
+        fmt::print(stderr, "error: only run, resume and check run on several MPI ranks; start this "
+                           "command without mpirun\n");
+      return 2;
+    }
+  }
   try {
     if (*check) return cmd_check(case_path, sets, check_parts);
     if (*report) return cmd_report(report_runs, report_out);
@@ -345,10 +387,17 @@ int main(int argc, char** argv) {
     const auto res = cdem::run_case(c, opt);
     return res.status;
   } catch (const cdem::InputError& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
+    print_error(e.what());
     return 2;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
+    print_error(e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cdem::RankSession mpi(&argc, &argv);  // MPI when started by mpirun (parallel/ranks.hpp)
+  return mpi.finish(cli_main(argc, argv));
 }

@@ -49,6 +49,16 @@ struct SolidCharges;
 std::vector<std::int32_t> charge_groups(std::size_t n_blocks, const BarCharges& bars,
                                         const SolidCharges& solids);
 
+// Contiguous ranges of the block order, of nearly equal weight (g.vwgt): part r holds blocks
+// [first[r], first[r + 1]) (parts + 1 entries, first[0] = 0, first[parts] = n). The block order
+// is a Hilbert curve through the model (mesh_order.hpp), so a range is a compact piece of it
+// (the space-filling-curve partition of Zoltan's HSFC). The distributed run's ownership in its
+// replicated stage (ranks.hpp); each cut is placed at the block boundary nearest to its share
+// of the total weight.
+std::vector<std::int64_t> block_ranges(const BlockGraph& g, int parts);
+// The same as a part per block (the layout of partition_kway and partition_quality).
+std::vector<std::int32_t> ranges_to_parts(const std::vector<std::int64_t>& first);
+
 // True when the program was built with METIS.
 bool have_metis();
 

@@ -478,23 +478,26 @@ std::int64_t block_forces_tet_reference(Model& m, std::int32_t begin, std::int32
   return inverted;
 }
 
-std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs) {
+std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs,
+                          std::int32_t lo, std::int32_t hi) {
   std::int64_t inverted = 0;
   const bool gs = gather_springs;
   for (const auto& g : m.groups) {
+    const std::int32_t begin = std::max(g.begin, lo), end = std::min(g.end, hi);
+    if (begin >= end) continue;
     if (g.kind != BlockKind::Elastic) {
-      const std::int64_t nb = m.block_first_node[g.begin], ne = m.block_first_node[g.end];
+      const std::int64_t nb = m.block_first_node[begin], ne = m.block_first_node[end];
       std::fill(m.f.begin() + nb, m.f.begin() + ne, Vec3{});
       if (gs) {
 #pragma omp parallel for schedule(static)
-        for (std::int32_t b = g.begin; b < g.end; ++b) add_spring_forces(m, b);
+        for (std::int32_t b = begin; b < end; ++b) add_spring_forces(m, b);
       }
       continue;
     }
     switch (g.type) {
-      case ElemType::Tri3: inverted += block_forces_tri(m, g.begin, g.end, first_inverted, gs); break;
-      case ElemType::Quad4: inverted += block_forces_quad(m, g.begin, g.end, first_inverted, gs); break;
-      case ElemType::Tet4: inverted += block_forces_tet(m, g.begin, g.end, first_inverted, gs); break;
+      case ElemType::Tri3: inverted += block_forces_tri(m, begin, end, first_inverted, gs); break;
+      case ElemType::Quad4: inverted += block_forces_quad(m, begin, end, first_inverted, gs); break;
+      case ElemType::Tet4: inverted += block_forces_tet(m, begin, end, first_inverted, gs); break;
     }
   }
   return inverted;

@@ -26,6 +26,9 @@ std::int64_t block_forces_tet_reference(Model& m, std::int32_t begin, std::int32
 // All elastic groups; explosive groups are zeroed here and loaded by the explosive kernels.
 // gather_springs: then each block also adds its nodes' spring forces (gather_spring_forces for
 // its nodes, same sums) right after assigning them: spring_forces must have run first.
-std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs = false);
+// [lo, hi): only the blocks of this range (a rank's share of a distributed run, ranks.hpp);
+// each block's results are the same bits whatever the range.
+std::int64_t block_forces(Model& m, std::int32_t* first_inverted, bool gather_springs = false,
+                          std::int32_t lo = 0, std::int32_t hi = INT32_MAX);
 
 }  // namespace cdem

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 
@@ -27,6 +28,8 @@
 #include "cdem/mesh/mesh_estimate.hpp"
 #include "cdem/mesh/mesh_order.hpp"
 #include "cdem/mesh/topology.hpp"
+#include "cdem/parallel/partition.hpp"
+#include "cdem/parallel/ranks.hpp"
 #include "cdem/solver/run_dir.hpp"
 #include "cdem/solver/run_state.hpp"
 #include "cdem/solver/simulation.hpp"
@@ -50,7 +53,8 @@ Mesh load_mesh(const Case& c) {
 
 int run_threads(const Case& c, int requested) {
   const int asked = requested > 0 ? requested : c.threads;
-  const int procs = available_processors();
+  // The ranks of a distributed run on this machine share its cores.
+  const int procs = std::max(1, available_processors() / ranks().local_size);
   if (asked <= 0) return procs;
   if (asked > procs) {
     spdlog::warn("{}: {} threads asked ({}), this machine has {} processors: using {} (the "
@@ -133,6 +137,21 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
 }
 
 }  // namespace
+
+// The bits of an energy balance's terms mixed into one word (FNV-1a): the ranks' agreement
+// check of a distributed run. Every term is a sum over the whole model, so a rank whose state
+// differs in any block moves at least one of them.
+std::uint64_t energy_bits(const EnergyBalance& e) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (double x : {e.kinetic, e.block_strain, e.spring_strain, e.fracture, e.damping,
+                   e.external_work, e.explosive_work, e.gravity_work, e.contact_strain,
+                   e.contact_friction, e.insertion}) {
+    std::uint64_t u;
+    std::memcpy(&u, &x, sizeof u);
+    h = (h ^ u) * 1099511628211ull;
+  }
+  return h;
+}
 
 // When no finite stable time step exists, say which material or block makes it so (the
 // Simulation would only say there is none).
@@ -313,20 +332,27 @@ void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string&
   io_state(ar, pc.solids);
 }
 
-RunResult run_case(const Case& c, const RunOptions& opt) {
+RunResult run_case(const Case& c, const RunOptions& options) {
   const auto wall0 = Clock::now();
+  // A distributed run (parallel/ranks.hpp): every rank steps the same state; rank 0 alone
+  // writes, prints and checkpoints.
+  const RankInfo& rk = ranks();
+  const bool root = rk.root();
+  RunOptions opt = options;
+  if (!root) opt.quiet = true;
   const int threads = run_threads(c, opt.threads);
   omp_set_num_threads(threads);
 
   // The directory is the run's alone: locked, and either a restart of the run in it or cleared of
   // an earlier run's results (refused without --overwrite) before anything is written.
-  RunDirLock lock(opt.out_dir);
+  std::optional<RunDirLock> lock;
+  if (root) lock.emplace(opt.out_dir);
   std::string signature = restart_signature(c);
   std::optional<StateArchive> ckpt;
   if (opt.restart) {
     ckpt.emplace(load_last_checkpoint(opt.out_dir, opt.quiet));
     check_checkpoint_case(*ckpt, c, opt.out_dir, signature);
-  } else {
+  } else if (root) {
     prepare_run_dir(opt.out_dir, opt.overwrite);
   }
 
@@ -339,6 +365,20 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   BarCharges& bars = pc.bars;
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
+  // The block kernel divided among the ranks: contiguous ranges of the Hilbert order.
+  PartitionQuality rank_q;
+  if (rk.size > 1) {
+    const auto groups = charge_groups(m.n_blocks(), bars, solids);
+    const BlockGraph g = block_graph(m, groups);
+    const auto rank_blocks = block_ranges(g, rk.size);
+    sim.distribute(rank_blocks, rk.rank);
+    rank_q = partition_quality(g, ranges_to_parts(rank_blocks), rk.size, groups);
+    if (!opt.quiet)
+      spdlog::info("{} ranks ({} on this machine): {}-{} blocks each, imbalance {:.3f}, {:.2f} % of "
+                   "the interfaces between ranks, {} charges across ranks",
+                   rk.size, rk.local_size, rank_q.blocks_min, rank_q.blocks_max, rank_q.imbalance,
+                   100 * rank_q.edge_cut_share, rank_q.together_split);
+  }
   if (!opt.quiet)
     spdlog::info("{}: {} blocks, {} nodes, {} spring points, {} interfaces; dt = {:.4g} s limited "
                  "by the {} (blocks {:.4g} s, springs {:.4g} s, safety {}); {} threads",
@@ -379,8 +419,8 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     if (!opt.quiet)
       spdlog::info("continuing run {} from t = {:.6g} s (step {})", run_id, sim.time(), sim.steps());
   }
-  RunWriter out(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "",
-                ckpt ? &*ckpt : nullptr);
+  std::optional<RunWriter> out;
+  if (root) out.emplace(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "", ckpt ? &*ckpt : nullptr);
   // reactions.csv (constrained face sets)
   ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
   const double e_floor = energy_floor(m);
@@ -436,14 +476,15 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
   std::int64_t checkpoints = 0;
   std::uintmax_t checkpoint_bytes = 0;
   auto write_state = [&]() {
+    if (!out) return;
     const auto t0 = Clock::now();
-    out.check_written();
+    out->check_written();
     StateArchive ar(false);
     ar.io("run.case_signature", signature);
     wall_so_far = wall_before + elapsed(wall0);
     loop_so_far = loop_before + elapsed(loop0);
     io_run_state(ar);
-    out.io_state(ar);
+    out->io_state(ar);
     std::filesystem::create_directories(checkpoint_dir(opt.out_dir));
     const std::string path = checkpoint_path(opt.out_dir, sim.steps());
     write_checkpoint(path, ar);
@@ -480,21 +521,28 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
       while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
       last = sim.energy();
-      out.write_history(m, t_state, last, monitors);
+      // The ranks' states are the same bits (ranks.hpp): checked at each sample.
+      if (rk.size > 1 && !same_over_ranks(energy_bits(last)))
+        throw std::runtime_error(fmt::format("the ranks' states differ at step {} (t = {:.6g} s): "
+                                             "a defect of the distributed run; please report it",
+                                             k, t_state));
+      if (out) out->write_history(m, t_state, last, monitors);
       uplift.sample_monitors(m, monitors, t_state);
       if (!reactions.empty()) {
         reactions.after_step(m, dt, t_state + 0.5 * dt);
-        out.write_reactions(t_state, reactions.face_sets(), reactions.forces());
+        if (out) out->write_reactions(t_state, reactions.face_sets(), reactions.forces());
       }
-      if (out.charges_csv()) write_charge_rows(out.charges_csv(), t_state, bars, solids);
+      if (out && out->charges_csv()) write_charge_rows(out->charges_csv(), t_state, bars, solids);
       for (std::size_t q = 0; q < monitors.size(); ++q) {
         const double vm = von_mises(m.stress[monitors[q]]);
         if (vm > peak_vm[q]) peak_vm[q] = vm, peak_vm_time[q] = t_state;
       }
       res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, t_state, e_floor);
       if (!res.diagnosis.empty()) {
-        out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
-        out.flush();
+        if (out) {
+          out->write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
+          out->flush();
+        }
         res.status = 3;
         spdlog::error("run stopped: {}", res.diagnosis);
         spdlog::error("the output written so far is in {}", opt.out_dir);
@@ -503,10 +551,14 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     }
     if (field || k + 1 == steps_limit) {
       while (next_field < field_times.size() && field_times[next_field] <= t_state + 0.5 * dt) ++next_field;
-      out.write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
-      out.check_written();
+      if (out) {
+        out->write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());
+        out->check_written();
+      }
     }
-    if (const int sig = stop_signal()) {
+    // A signal reaches the ranks at different steps: they stop together, at the step of the
+    // first to see it.
+    if (const int sig = rk.size > 1 ? static_cast<int>(max_over_ranks(stop_signal())) : stop_signal()) {
       write_state();
       res.status = 128 + sig;
       res.diagnosis = fmt::format("interrupted by {} at t = {:.6g} s (step {}); continue it with "
@@ -542,8 +594,9 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
     }
   }
   if (tty && res.status == 0) fmt::print(stderr, "\n");
-  out.flush();
   res.steps = sim.steps();
+  if (!out) return res;  // not rank 0: the output is rank 0's
+  out->flush();
   res.wall_time_s = wall_before + std::chrono::duration<double>(Clock::now() - wall0).count();
   const double loop_s = loop_before + std::chrono::duration<double>(Clock::now() - loop0).count();
   const double loop_this = std::chrono::duration<double>(Clock::now() - loop0).count();
@@ -559,6 +612,9 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"wall_time_s", json_number(res.wall_time_s)},
       {"loop_time_s", json_number(loop_s)},
       {"threads", std::to_string(threads)},
+      {"ranks", std::to_string(rk.size)},
+      {"ranks_imbalance", json_number(rk.size > 1 ? rank_q.imbalance : 1.0)},
+      {"ranks_charges_split", std::to_string(rank_q.together_split)},
       {"threads_adaptive", opt.adapt_threads && threads > 1 ? "true" : "false"},
       {"threads_final", std::to_string(governor.threads())},
       {"threads_switches", std::to_string(governor.switches())},
@@ -604,7 +660,7 @@ RunResult run_case(const Case& c, const RunOptions& opt) {
       {"bar_segments", std::to_string(bars.n_segments())},
       {"explosive_blocks", std::to_string(solids.block.size())},
       {"collapsed_explosive_blocks", std::to_string(solids.dead_count)},
-      {"field_outputs", std::to_string(out.field_outputs())},
+      {"field_outputs", std::to_string(out->field_outputs())},
       {"checkpoints_written", std::to_string(checkpoints)},
       {"checkpoint_write_time_s", json_number(checkpoint_s)},
       {"checkpoint_bytes", std::to_string(checkpoint_bytes)},

@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "cdem/core/error.hpp"
+#include "cdem/parallel/ranks.hpp"
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
@@ -232,9 +234,11 @@ void Simulation::step(bool sample) {
   // 2. spring forces (on x(n), independent of the block forces; tied mode: untied points only)
   spring_forces(m_, dt_, t_);
   lap(kStepSprings);
-  // 3. block forces (assign f), each block adding its nodes' spring forces right after
+  // 3. block forces (assign f), each block adding its nodes' spring forces right after; in a
+  // distributed run this rank's blocks, then shared with the other ranks
   std::int32_t first = -1;
-  auto inv = block_forces(m_, &first, /*gather_springs=*/true);
+  auto inv = block_forces(m_, &first, /*gather_springs=*/true, own_lo_, own_hi_);
+  if (!rank_blocks_.empty()) inv = share_blocks(inv);
   if (inv > 0) {
     // A bar's charge blocks (mostly products: little or no rock stiffness) may collapse once the
     // gas has left them; that is not the rock inverting (the run goes on). Recounted here, in
@@ -307,6 +311,29 @@ void Simulation::step(bool sample) {
   t_ += dt_;
   ++steps_;
   lap(kStepWork);
+}
+
+void Simulation::distribute(const std::vector<std::int64_t>& block_first, int rank) {
+  rank_blocks_.clear();
+  rank_nodes_.clear();
+  own_lo_ = 0;
+  own_hi_ = std::numeric_limits<std::int32_t>::max();
+  const int parts = static_cast<int>(block_first.size()) - 1;
+  if (parts <= 1) return;
+  if (rank < 0 || rank >= parts || block_first.back() != static_cast<std::int64_t>(m_.n_blocks()))
+    throw std::logic_error("Simulation::distribute: ranges not of this model and rank");
+  rank_blocks_ = block_first;
+  for (auto b : block_first) rank_nodes_.push_back(m_.block_first_node[b]);
+  own_lo_ = static_cast<std::int32_t>(block_first[rank]);
+  own_hi_ = static_cast<std::int32_t>(block_first[rank + 1]);
+}
+
+std::int64_t Simulation::share_blocks(std::int64_t inverted) {
+  share_slices(&m_.f.data()->x, rank_nodes_, 3);
+  share_slices(m_.stress.data()->data(), rank_blocks_, 6);
+  share_slices(m_.strain_energy.data(), rank_blocks_, 1);
+  share_slices(m_.vol_ratio.data(), rank_blocks_, 1);
+  return max_over_ranks(inverted);
 }
 
 std::size_t Simulation::solver_bytes() const {

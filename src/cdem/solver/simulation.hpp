@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -168,7 +169,15 @@ class Simulation {
   // the same case and mesh.
   void io_state(StateArchive& ar);
 
+  // A distributed run (parallel/ranks.hpp): this rank computes the block kernel for the blocks
+  // [block_first[rank], block_first[rank + 1]) only, and each step shares them with the other
+  // ranks (block_first: one range per rank, block_ranges in parallel/partition.hpp).
+  void distribute(const std::vector<std::int64_t>& block_first, int rank);
+
  private:
+  // The block kernel's results of every rank's blocks to every rank (forces, stress, strain
+  // energy, volume ratio); returns the inverted-block count's maximum over the ranks.
+  std::int64_t share_blocks(std::int64_t inverted);
   void setup_damping_zones(const Case& c);
   void setup_initial_stress(const Case& c);
 
@@ -202,6 +211,9 @@ class Simulation {
   std::vector<Vec3> sd_force_;
   std::vector<double> sd_power_;
   double w_sdamp_ = 0, last_sdamp_ = 0, beta_max_ = 0;
+  // Distributed run: the ranks' block and node ranges (empty on one rank), this rank's blocks.
+  std::vector<std::int64_t> rank_blocks_, rank_nodes_;
+  std::int32_t own_lo_ = 0, own_hi_ = std::numeric_limits<std::int32_t>::max();
 };
 
 }  // namespace cdem

@@ -1,0 +1,131 @@
+#include "cdem/parallel/ranks.hpp"
+
+#include <cstdlib>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/core.h>
+
+#ifdef CDEM_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace cdem {
+
+namespace {
+RankInfo g_ranks;
+#ifdef CDEM_HAVE_MPI
+bool g_mpi = false;  // MPI_Init_thread was called
+// Started by an MPI launcher (Open MPI's mpirun, or a PMI/PMIx launcher such as srun): outside
+// one, MPI_Init would start a singleton and its runtime for nothing.
+bool launched_by_mpi() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+#endif
+}  // namespace
+
+const RankInfo& ranks() { return g_ranks; }
+
+bool have_mpi() {
+#ifdef CDEM_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+RankSession::RankSession(int* argc, char*** argv) {
+#ifdef CDEM_HAVE_MPI
+  if (!launched_by_mpi()) return;
+  int provided = 0;
+  if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+    fmt::print(stderr, "error: MPI_Init_thread failed\n");
+    std::exit(1);
+  }
+  g_mpi = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &g_ranks.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &g_ranks.size);
+  MPI_Comm local;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
+  MPI_Comm_size(local, &g_ranks.local_size);
+  MPI_Comm_free(&local);
+#else
+  (void)argc;
+  (void)argv;
+  // Started as one of several processes by an MPI launcher, without MPI to talk to the others:
+  // each would run the whole case into the same directory.
+  const char* n = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (!n) n = std::getenv("PMI_SIZE");
+  if (n && std::atoi(n) > 1) {
+    fmt::print(stderr, "error: this cdemblast was built without MPI (install libopenmpi-dev and "
+                       "rebuild): it cannot run as one of {} ranks\n", n);
+    std::exit(2);
+  }
+#endif
+}
+
+RankSession::~RankSession() {
+#ifdef CDEM_HAVE_MPI
+  if (g_mpi) MPI_Finalize();
+  g_mpi = false;
+#endif
+}
+
+int RankSession::finish(int rc) {
+#ifdef CDEM_HAVE_MPI
+  if (g_mpi && g_ranks.size > 1 && (rc == 1 || rc == 2)) MPI_Abort(MPI_COMM_WORLD, rc);
+#endif
+  return rc;
+}
+
+void share_slices(double* data, const std::vector<std::int64_t>& first, int stride) {
+#ifdef CDEM_HAVE_MPI
+  if (g_ranks.size == 1) return;
+  const int n = g_ranks.size;
+  if (static_cast<int>(first.size()) != n + 1)
+    throw std::logic_error("share_slices: the slices are not one per rank");
+  // Counts in doubles: MPI's counts are int. A model whose one array exceeds 2^31 doubles
+  // (700 M nodes' forces) is far beyond what replicated state can hold anyway.
+  std::vector<int> count(n), displ(n);
+  for (int r = 0; r < n; ++r) {
+    const std::int64_t c = (first[r + 1] - first[r]) * stride, d = first[r] * stride;
+    if (c > std::numeric_limits<int>::max() || d > std::numeric_limits<int>::max())
+      throw std::runtime_error("share_slices: a slice beyond 2^31 doubles");
+    count[r] = static_cast<int>(c);
+    displ[r] = static_cast<int>(d);
+  }
+  MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, data, count.data(), displ.data(), MPI_DOUBLE,
+                 MPI_COMM_WORLD);
+#else
+  (void)data;
+  (void)first;
+  (void)stride;
+#endif
+}
+
+std::int64_t max_over_ranks(std::int64_t v) {
+#ifdef CDEM_HAVE_MPI
+  if (g_ranks.size == 1) return v;
+  std::int64_t out = v;
+  MPI_Allreduce(&v, &out, 1, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+  return out;
+#else
+  return v;
+#endif
+}
+
+bool same_over_ranks(std::uint64_t h) {
+#ifdef CDEM_HAVE_MPI
+  if (g_ranks.size == 1) return true;
+  std::uint64_t in[2] = {h, ~h}, out[2] = {0, 0};
+  MPI_Allreduce(in, out, 2, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
+  return out[0] == h && out[1] == ~h;  // max of h and max of ~h (the min of h) both h
+#else
+  (void)h;
+  return true;
+#endif
+}
+
+}  // namespace cdem

@@ -1,0 +1,61 @@
+// The processes of a distributed run: MPI ranks (docs/parallel.md).
+//
+// `mpirun -np N cdemblast run CASE` starts N processes of the same program on the same case.
+// Each holds the whole model and steps it; the block kernel, the step's largest loop over the
+// model, is divided among them by contiguous ranges of the blocks' Hilbert order
+// (block_ranges, partition.hpp), and each step the ranks share what their ranges computed
+// (share_slices) before anything reads it. Every value is computed by exactly one rank, with
+// the same arithmetic as on one rank, and every sum runs over the whole model in its fixed
+// order on every rank: so N ranks give the results of one bit for bit, and every rank holds
+// the same state. Rank 0 writes the output.
+//
+// This is the first stage of issue 17: the state is replicated (a rank's memory is the whole
+// model's), and only the block kernel is divided. docs/parallel.md says what the halo stage
+// will change.
+//
+// Without MPI at build time, or when the program was not started by an MPI launcher (no
+// OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK in the environment), there is one rank and every
+// function here is a no-op.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cdem {
+
+struct RankInfo {
+  int rank = 0;
+  int size = 1;
+  int local_size = 1;  // ranks on this machine (they share its cores)
+  bool root() const { return rank == 0; }
+};
+
+// This process's rank and the number of ranks (0 of 1 before RankSession or without MPI).
+const RankInfo& ranks();
+// True when the program was built with MPI.
+bool have_mpi();
+
+// MPI's lifetime: MPI_Init_thread (funneled: OpenMP threads never call MPI) when launched by an
+// MPI launcher, MPI_Finalize at the end (finish).
+class RankSession {
+ public:
+  RankSession(int* argc, char*** argv);
+  ~RankSession();
+  RankSession(const RankSession&) = delete;
+  RankSession& operator=(const RankSession&) = delete;
+  // The program's exit code. Under N ranks an exit code of 1 or 2 (an error: it may have hit
+  // one rank only, the others then wait in an exchange) ends every rank with MPI_Abort; any
+  // other code (a finished, unstable or interrupted run: every rank ends it at the same step)
+  // finalizes normally.
+  int finish(int rc);
+};
+
+// In place, every rank's slice of `data` to every rank: rank r computed the elements
+// [first[r], first[r + 1]) (first has size() + 1 entries), each `stride` doubles.
+void share_slices(double* data, const std::vector<std::int64_t>& first, int stride);
+// The largest of `v` over the ranks.
+std::int64_t max_over_ranks(std::int64_t v);
+// True when `h` is the same on every rank (a check that the ranks' states agree).
+bool same_over_ranks(std::uint64_t h);
+
+}  // namespace cdem

@@ -1,0 +1,100 @@
+#!/usr/bin/env bash
+# A distributed run (mpirun -np N, docs/parallel.md) gives the results of one process bit for
+# bit: 1, 2, 3 and 4 ranks on a 2D bar blast (SPEC 5.1's case, shortened) and on a 3D blast with
+# cracking, contact and 12 bars (the coarse SPEC 5.3 cylinder, shortened); a checkpoint written
+# by 2 ranks continued on 3 gives the uninterrupted run's results. Every output file is compared
+# byte for byte (rank 0 writes them whole, in the layout of one process), summary.json without
+# its timings and run id. Tolerance: none. Every value is computed by one rank with one rank's
+# arithmetic and every sum runs in the model's order on every rank (parallel/ranks.hpp).
+#
+# Skipped (77) without mpirun or in a build without MPI. Runs as root in CI: Open MPI's root
+# guard is lifted with its two environment variables; 3 and 4 ranks on 2 cores need
+# --oversubscribe.
+source "$(dirname "$0")/../script_preamble.sh" "$@"
+command -v mpirun > /dev/null || { echo "SKIP: no mpirun (install openmpi-bin)"; exit 77; }
+"$BIN" --version | grep -q "MPI: yes" || { echo "SKIP: cdemblast built without MPI"; exit 77; }
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+MPIRUN=(mpirun --oversubscribe --bind-to none)
+
+# run NRANKS OUT CASE ARGS...: one process for 1, mpirun for more; 1 thread per rank.
+run() {
+  local n=$1 out=$2
+  shift 2
+  if [ "$n" -eq 1 ]; then
+    "$BIN" run "$@" -o "$out" -t 1 --fixed-threads -q
+  else
+    "${MPIRUN[@]}" -np "$n" "$BIN" run "$@" -o "$out" -t 1 --fixed-threads -q
+  fi
+}
+
+# same A B: every output of run A equals run B's (files byte for byte, summary.json's physics).
+same() {
+  local a=$1 b=$2
+  (cd "$a" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' | sort) > "$TMP/files_a"
+  (cd "$b" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' | sort) > "$TMP/files_b"
+  cmp -s "$TMP/files_a" "$TMP/files_b" || fail "$b: not the same files as $a: $(diff "$TMP/files_a" "$TMP/files_b" | head -5)"
+  [ "$(wc -l < "$TMP/files_a")" -gt 8 ] || fail "$a: too few outputs to compare"
+  while read -r f; do
+    if [[ "$f" == *.toml || "$f" == *.pvd ]]; then  # these name the run's id
+      cmp -s <(grep -v run_id "$a/$f") <(grep -v run_id "$b/$f") || fail "$b/$f differs from $a/$f"
+    else
+      cmp -s "$a/$f" "$b/$f" || fail "$b/$f differs from $a/$f"
+    fi
+  done < "$TMP/files_a"
+  "$PY" - "$a/summary.json" "$b/summary.json" <<'EOF' || fail "$b/summary.json differs from $a's"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:])
+# timings, the run's id, the rank count and the ranks' division, the restart point
+skip = {"run_id", "wall_time_s", "loop_time_s", "threads_step_seconds", "block_steps_per_s",
+        "spring_steps_per_s", "checkpoint_write_time_s", "checkpoint_bytes", "checkpoints_written",
+        "kernel_time_s", "ranks", "ranks_imbalance", "ranks_charges_split", "restarted_at_step",
+        "threads_switches", "threads_final"}
+bad = [k for k in a if k not in skip and a[k] != b.get(k)]
+if bad:
+    sys.exit(f"keys differ: {bad[:8]}")
+EOF
+}
+
+# 2D: SPEC 5.1's bar case to 0.4 ms (cracks around the hole by then).
+C2=("$ROOT/examples/single_hole_2d/bar.toml" --set simulation.end_time=4e-4)
+for n in 1 2 3 4; do run "$n" "$TMP/2d_$n" "${C2[@]}" 2> "$TMP/log_2d_$n" || { cat "$TMP/log_2d_$n"; fail "2D on $n ranks"; }; done
+for n in 2 3 4; do same "$TMP/2d_1" "$TMP/2d_$n"; done
+"$PY" -c "import json,sys; s=json.load(open('$TMP/2d_1/summary.json')); sys.exit(0 if s['fracture_degree'] > 0 else 'no cracking in the 2D run')" || fail "2D: nothing to compare"
+echo "2D: 1, 2, 3, 4 ranks identical"
+
+# 3D: the coarse SPEC 5.3 cylinder, all holes at once, to 0.3 ms: cracking, contact, 12 bars.
+C3=("$ROOT/examples/pile_pit_3d/case.toml" --set mesh.generate.element_size=0.2
+    --set mesh.generate.ring_element_size=0.25 --set mesh.generate.refine.0.size=0.03
+    --set mesh.generate.refine.0.radius=0.04 --set delays.1=0.0 --set delays.2=0.0
+    --set delays.3=0.0 --set simulation.end_time=3e-4)
+for n in 1 2 3 4; do run "$n" "$TMP/3d_$n" "${C3[@]}" 2> "$TMP/log_3d_$n" || { cat "$TMP/log_3d_$n"; fail "3D on $n ranks"; }; done
+for n in 2 3 4; do same "$TMP/3d_1" "$TMP/3d_$n"; done
+"$PY" - "$TMP/3d_1/summary.json" "$TMP/3d_3/summary.json" "$TMP/3d_4/summary.json" <<'EOF' || fail "3D: the run does not exercise what it should"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["fracture_degree"] > 0.1, s["fracture_degree"]
+assert s["contact_pairs_max"] > 0 and s["contact_rebuilds"] > 0, "no contact"
+assert s["bar_segments"] > 0
+# a bar whose blocks lie on more than one rank (its loads reach blocks of several ranks)
+assert max(json.load(open(p))["ranks_charges_split"] for p in sys.argv[2:]) > 0, "no bar across ranks"
+EOF
+echo "3D: 1, 2, 3, 4 ranks identical"
+
+# Restart across rank counts: 2 ranks to 0.3 ms with a checkpoint at 0.16 ms; a copy without
+# the final checkpoint continued on 3 ranks.
+run 2 "$TMP/3d_c" "${C3[@]}" --set simulation.checkpoint_interval=1.6e-4 2> "$TMP/log_c" ||
+  { cat "$TMP/log_c"; fail "3D, 2 ranks with a checkpoint"; }
+cp -r "$TMP/3d_c" "$TMP/3d_r"
+[ "$(ls "$TMP/3d_r/checkpoints" | wc -l)" = 2 ] || fail "expected a middle and a final checkpoint"
+rm "$(ls -d "$TMP/3d_r"/checkpoints/* | tail -1)"
+"${MPIRUN[@]}" -np 3 "$BIN" run "${C3[@]}" --set simulation.checkpoint_interval=1.6e-4 \
+  --restart "$TMP/3d_r" -t 1 --fixed-threads -q 2> "$TMP/log_r" || { cat "$TMP/log_r"; fail "3D, continued on 3 ranks"; }
+grep -q '"restarted_at_step": [1-9]' "$TMP/3d_r/summary.json" || fail "not restarted mid-run"
+for d in 3d_c 3d_r; do
+  for f in energy.csv monitors.csv fracture.csv charges.csv grading.csv reactions.csv; do
+    [ -f "$TMP/3d_1/$f" ] || continue
+    cmp -s "$TMP/3d_1/$f" "$TMP/$d/$f" || fail "$d: $f differs from the 1-rank run's"
+  done
+done
+same "$TMP/3d_c" "$TMP/3d_r"
+echo "restart: written by 2 ranks, continued on 3: identical to 1 rank uninterrupted"

@@ -86,5 +86,40 @@ TEST(Partition, QualityCountsTheCut) {
   EXPECT_DOUBLE_EQ(q.imbalance, 1.0);
 }
 
+// The ranks' division of a distributed run (block_ranges): contiguous ranges that cover every
+// block once, in order, with the weights balanced to one block's weight (the cut is at the
+// block boundary nearest each share: the largest part exceeds the mean by at most one block's
+// weight, ~15 units against ~15 000 per part at 30k blocks and 16 parts, so 1 % is generous
+// and 5 % is the bound); every part non-empty; compact parts: a scattered division
+// cuts 1 - 1/parts of the interfaces (94 % at 16 parts), the Hilbert ranges 16 % at 16 parts
+// (METIS 5 %: docs/parallel.md), so the bound is 25 %.
+TEST(Partition, RankRangesBalanced) {
+  const PreparedCase pc = bench_box(30000, 1);
+  const BlockGraph g = block_graph(pc.sim.model());
+  const auto n = static_cast<std::int64_t>(g.n());
+  std::int32_t wmax = *std::max_element(g.vwgt.begin(), g.vwgt.end());
+  for (int parts : {1, 2, 3, 4, 16}) {
+    const auto first = block_ranges(g, parts);
+    ASSERT_EQ(first.size(), static_cast<std::size_t>(parts + 1));
+    EXPECT_EQ(first.front(), 0);
+    EXPECT_EQ(first.back(), n);
+    std::int64_t total = 0, wmax_part = 0;
+    for (int r = 0; r < parts; ++r) {
+      ASSERT_LT(first[r], first[r + 1]) << parts << " parts: part " << r << " empty";
+      std::int64_t w = 0;
+      for (auto b = first[r]; b < first[r + 1]; ++b) w += g.vwgt[b];
+      total += w;
+      wmax_part = std::max(wmax_part, w);
+    }
+    const double mean = static_cast<double>(total) / parts;
+    EXPECT_LE(wmax_part, mean + wmax) << parts << " parts";
+    const auto q = partition_quality(g, ranges_to_parts(first), parts);
+    EXPECT_LE(q.imbalance, 1.01) << parts << " parts";
+    if (parts > 1) {
+      EXPECT_LT(q.edge_cut_share, 0.25) << parts << " parts";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace cdem

@@ -61,6 +61,13 @@ for n in 1 2 3 4; do run "$n" "$TMP/2d_$n" "${C2[@]}" 2> "$TMP/log_2d_$n" || { c
 for n in 2 3 4; do same "$TMP/2d_1" "$TMP/2d_$n"; done
 "$PY" -c "import json,sys; s=json.load(open('$TMP/2d_1/summary.json')); sys.exit(0 if s['fracture_degree'] > 0 else 'no cracking in the 2D run')" || fail "2D: nothing to compare"
 echo "2D: 1, 2, 3, 4 ranks identical"
+# the method paper's form (every interface a spring: the spring kernel divided over all of them)
+for n in 1 3; do
+  run "$n" "$TMP/2ds_$n" "${C2[@]}" --set 'simulation.interfaces="springs"' 2> "$TMP/log_2ds_$n" ||
+    { cat "$TMP/log_2ds_$n"; fail "2D springs mode on $n ranks"; }
+done
+same "$TMP/2ds_1" "$TMP/2ds_3"
+echo "2D springs mode: 1, 3 ranks identical"
 
 # 3D: the coarse SPEC 5.3 cylinder, all holes at once, to 0.3 ms: cracking, contact, 12 bars.
 C3=("$ROOT/examples/pile_pit_3d/case.toml" --set mesh.generate.element_size=0.2

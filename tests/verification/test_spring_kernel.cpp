@@ -13,6 +13,8 @@
 // mode (the default of a case), where both forms work on the active interfaces only and skip
 // the tied points: the pre-cracked interfaces untied, and one point of a further 15 % of the
 // interfaces untied while intact (an opened point: the fast path, or the fracture-energy law).
+// The kernel divided between two ranks of a distributed run (each its share of the list, then
+// the shares exchanged as packed state) gives the same bits too.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,6 +36,43 @@ using namespace test_models;
 struct Counts {
   std::size_t broken = 0, released = 0, intact = 0;
 };
+
+// The spring state of two models: the names of the arrays that differ in any bit.
+std::string differing(const Model& m, const Model& ref) {
+  std::string differ;
+  auto check = [&differ](bool eq, const char* what) {
+    if (!eq) differ += std::string(" ") + what;
+  };
+  check(same_bits(m.sp_fn, ref.sp_fn), "sp_fn");
+  check(same_bits(m.sp_fs, ref.sp_fs), "sp_fs");
+  check(same_bits(m.sp_w, ref.sp_w), "sp_w");
+  check(same_bits(m.sp_slip, ref.sp_slip), "sp_slip");
+  check(same_bits(m.sp_dil, ref.sp_dil), "sp_dil");
+  check(same_bits(m.sp_state, ref.sp_state), "sp_state");
+  check(same_bits(m.sp_mode, ref.sp_mode), "sp_mode");
+  check(same_bits(m.sp_break_time, ref.sp_break_time), "sp_break_time");
+  check(same_bits(m.sp_dissipated, ref.sp_dissipated), "sp_dissipated");
+  check(same_bits(m.iface_normal, ref.iface_normal), "iface_normal");
+  return differ;
+}
+
+// A distributed run's division of the kernel (Simulation::share_springs), on two "ranks" a and
+// b: each steps its share of the list (a cut off a chunk boundary), then each packs its share
+// and the other unpacks it (pack_spring_state, unpack_spring_state).
+void ranked_spring_step(Model& a, Model& b, double dt, double t) {
+  const auto n = static_cast<std::int64_t>(a.tied ? a.active_ifaces.size() : a.n_ifaces());
+  const std::int64_t mid = std::min<std::int64_t>(n, n / 2 + 7);
+  spring_forces(a, dt, t, 0, mid);
+  spring_forces(b, dt, t, mid, n);
+  const int d = spring_state_doubles(a);
+  std::vector<double> buf(static_cast<std::size_t>(n * d));
+  const std::int32_t* la = a.tied ? a.active_ifaces.data() : nullptr;
+  const std::int32_t* lb = b.tied ? b.active_ifaces.data() : nullptr;
+  pack_spring_state(a, la, 0, mid, buf.data());
+  unpack_spring_state(b, lb, 0, mid, buf.data());
+  pack_spring_state(b, lb, mid, n, buf.data() + mid * d);
+  unpack_spring_state(a, la, mid, n, buf.data() + mid * d);
+}
 
 Counts run_pair(bool three_d, InterfaceLaw law, bool preload, bool tied) {
   const Mesh mesh = three_d ? tet_box(7, 6, 5, 0.7, 0.6, 0.5) : tri_grid(16, 14, 1.6, 1.4);
@@ -77,28 +116,19 @@ Counts run_pair(bool three_d, InterfaceLaw law, bool preload, bool tied) {
   }
   Counts c;  // intact after the first step, broken and released at the end
   const double dt = 4e-5;  // 60 steps: ~5 cm of relative motion, beyond the release distance for some
-  Model ref = m;
+  Model ref = m, rank_a = m, rank_b = m;
   spring_forces_reference(m, dt, 0.0);  // first call: previous normals rebuilt (generic path)
   spring_forces_reference(ref, dt, 0.0);
+  ranked_spring_step(rank_a, rank_b, dt, 0.0);
   for (int step = 1; step <= 60; ++step) {
-    for (Model* mm : {&m, &ref})
+    for (Model* mm : {&m, &ref, &rank_a, &rank_b})
       for (std::size_t n = 0; n < mm->n_nodes(); ++n) mm->x[n] += dt * mm->v[n];
     spring_forces(m, dt, step * dt);
     spring_forces_reference(ref, dt, step * dt);
-    std::string differ;
-    auto check = [&differ](bool eq, const char* what) {
-      if (!eq) differ += std::string(" ") + what;
-    };
-    check(same_bits(m.sp_fn, ref.sp_fn), "sp_fn");
-    check(same_bits(m.sp_fs, ref.sp_fs), "sp_fs");
-    check(same_bits(m.sp_w, ref.sp_w), "sp_w");
-    check(same_bits(m.sp_slip, ref.sp_slip), "sp_slip");
-    check(same_bits(m.sp_dil, ref.sp_dil), "sp_dil");
-    check(same_bits(m.sp_state, ref.sp_state), "sp_state");
-    check(same_bits(m.sp_mode, ref.sp_mode), "sp_mode");
-    check(same_bits(m.sp_break_time, ref.sp_break_time), "sp_break_time");
-    check(same_bits(m.sp_dissipated, ref.sp_dissipated), "sp_dissipated");
-    check(same_bits(m.iface_normal, ref.iface_normal), "iface_normal");
+    ranked_spring_step(rank_a, rank_b, dt, step * dt);
+    std::string differ = differing(m, ref);
+    if (const std::string d = differing(rank_a, ref); !d.empty()) differ += " (rank a:" + d + ")";
+    if (const std::string d = differing(rank_b, ref); !d.empty()) differ += " (rank b:" + d + ")";
     const bool same = differ.empty();
     EXPECT_TRUE(same) << (three_d ? "3D " : "2D ") << (tied ? "tied " : "") << name_of(law)
                       << (preload ? " preloaded" : "")

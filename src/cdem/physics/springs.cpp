@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 #include "cdem/mesh/element_geometry.hpp"
@@ -251,26 +252,26 @@ inline int spring_interface(Model& m, std::int64_t i, double dt, double t, bool 
 
 // The reference form, one interface at a time: the first call (no previous normal kept) and
 // any spring_points_per_iface other than 2 or 3.
-void spring_forces_generic(Model& m, double dt, double t) {
-  const auto ni = static_cast<std::int64_t>(m.n_ifaces());
+void spring_forces_generic(Model& m, double dt, double t, std::int64_t lo, std::int64_t hi) {
+  const auto ni = std::min(hi, static_cast<std::int64_t>(m.n_ifaces()));
   const bool have_old = m.iface_normal_set;
   const bool fe = !m.sp_w.empty();  // fracture-energy state kept (release_unused_spring_state)
   std::int64_t released = 0;
 #pragma omp parallel for schedule(static) reduction(+ : released)
-  for (std::int64_t i = 0; i < ni; ++i) released += spring_interface<false>(m, i, dt, t, have_old, fe);
+  for (std::int64_t i = lo; i < ni; ++i) released += spring_interface<false>(m, i, dt, t, have_old, fe);
   m.released_points += released;
   m.iface_normal_set = true;
 }
 
 // Tied mode: the active interfaces only (those with an untied point; their normals are kept
 // from activation on), tied points skipped.
-void spring_forces_tied(Model& m, double dt, double t) {
-  const auto na = static_cast<std::int64_t>(m.active_ifaces.size());
+void spring_forces_tied(Model& m, double dt, double t, std::int64_t lo, std::int64_t hi) {
+  const auto na = std::min(hi, static_cast<std::int64_t>(m.active_ifaces.size()));
   const bool fe = !m.sp_w.empty();
   const std::int32_t* list = m.active_ifaces.data();
   std::int64_t released = 0;
 #pragma omp parallel for schedule(static) reduction(+ : released)
-  for (std::int64_t k = 0; k < na; ++k) released += spring_interface<true>(m, list[k], dt, t, true, fe);
+  for (std::int64_t k = lo; k < na; ++k) released += spring_interface<true>(m, list[k], dt, t, true, fe);
   m.released_points += released;
   m.iface_normal_set = true;
 }
@@ -585,15 +586,15 @@ int spring_chunk(Model& m, std::int64_t i0, int w, double dt, double t, bool fe,
 // those with an untied point, their normals kept from activation on -- in chunks of that list,
 // tied points skipped: the same arithmetic as spring_forces_generic and spring_forces_tied.
 template <int NP, bool kG0, bool kList = false>
-void spring_forces_chunked(Model& m, double dt, double t) {
+void spring_forces_chunked(Model& m, double dt, double t, std::int64_t lo, std::int64_t hi) {
   const std::int32_t* list = kList ? m.active_ifaces.data() : nullptr;
-  const auto ni = static_cast<std::int64_t>(kList ? m.active_ifaces.size() : m.n_ifaces());
-  const std::int64_t nc = (ni + kChunk - 1) / kChunk;
+  const auto ni = std::min(hi, static_cast<std::int64_t>(kList ? m.active_ifaces.size() : m.n_ifaces()));
+  const std::int64_t nc = ni > lo ? (ni - lo + kChunk - 1) / kChunk : 0;
   const bool fe = !m.sp_w.empty();
   std::int64_t released = 0;
 #pragma omp parallel for schedule(static) reduction(+ : released)
   for (std::int64_t c = 0; c < nc; ++c) {
-    const std::int64_t i0 = c * kChunk;
+    const std::int64_t i0 = lo + c * kChunk;
     released += spring_chunk<NP, kG0, kList>(
         m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe, list);
   }
@@ -603,7 +604,7 @@ void spring_forces_chunked(Model& m, double dt, double t) {
 
 }  // namespace
 
-void spring_forces(Model& m, double dt, double t) {
+void spring_forces(Model& m, double dt, double t, std::int64_t lo, std::int64_t hi) {
   if (m.iface_normal.size() != m.n_ifaces()) {
     m.iface_normal.assign(m.n_ifaces(), Vec3{});
     m.iface_normal_set = false;
@@ -611,20 +612,73 @@ void spring_forces(Model& m, double dt, double t) {
   const bool g0 = !m.sp_g0.empty();
   if (m.tied) {
     if (m.springs_per_iface == 3)
-      g0 ? spring_forces_chunked<3, true, true>(m, dt, t) : spring_forces_chunked<3, false, true>(m, dt, t);
+      g0 ? spring_forces_chunked<3, true, true>(m, dt, t, lo, hi) : spring_forces_chunked<3, false, true>(m, dt, t, lo, hi);
     else if (m.springs_per_iface == 2)
-      g0 ? spring_forces_chunked<2, true, true>(m, dt, t) : spring_forces_chunked<2, false, true>(m, dt, t);
+      g0 ? spring_forces_chunked<2, true, true>(m, dt, t, lo, hi) : spring_forces_chunked<2, false, true>(m, dt, t, lo, hi);
     else
-      spring_forces_tied(m, dt, t);
+      spring_forces_tied(m, dt, t, lo, hi);
     return;
   }
   if (!m.iface_normal_set || (m.springs_per_iface != 2 && m.springs_per_iface != 3)) {
-    spring_forces_generic(m, dt, t);
+    spring_forces_generic(m, dt, t, lo, hi);
   } else if (m.springs_per_iface == 3) {
-    g0 ? spring_forces_chunked<3, true>(m, dt, t) : spring_forces_chunked<3, false>(m, dt, t);
+    g0 ? spring_forces_chunked<3, true>(m, dt, t, lo, hi) : spring_forces_chunked<3, false>(m, dt, t, lo, hi);
   } else {
-    g0 ? spring_forces_chunked<2, true>(m, dt, t) : spring_forces_chunked<2, false>(m, dt, t);
+    g0 ? spring_forces_chunked<2, true>(m, dt, t, lo, hi) : spring_forces_chunked<2, false>(m, dt, t, lo, hi);
   }
+}
+
+int spring_state_doubles(const Model& m) {
+  return 3 + m.springs_per_iface * (m.sp_w.empty() ? 8 : 11);
+}
+
+namespace {
+// One interface's state to `buf` (kPack) or from it: the same order both ways.
+template <bool kPack, class M>
+void move_spring_state(M& m, std::int64_t i, std::conditional_t<kPack, double, const double>* buf) {
+  auto io = [&](auto& v) {
+    if constexpr (kPack)
+      *buf++ = static_cast<double>(v);
+    else
+      v = static_cast<std::remove_reference_t<decltype(v)>>(*buf++);
+  };
+  io(m.iface_normal[i].x);
+  io(m.iface_normal[i].y);
+  io(m.iface_normal[i].z);
+  const bool fe = !m.sp_w.empty();
+  const int np = m.springs_per_iface;
+  for (std::int64_t s = i * np; s < (i + 1) * np; ++s) {
+    io(m.sp_fn[s]);
+    io(m.sp_fs[s].x);
+    io(m.sp_fs[s].y);
+    io(m.sp_fs[s].z);
+    io(m.sp_state[s]);
+    io(m.sp_mode[s]);
+    io(m.sp_break_time[s]);
+    io(m.sp_dissipated[s]);
+    if (fe) {
+      io(m.sp_w[s]);
+      io(m.sp_slip[s]);
+      io(m.sp_dil[s]);
+    }
+  }
+}
+}  // namespace
+
+void pack_spring_state(const Model& m, const std::int32_t* list, std::int64_t lo, std::int64_t hi,
+                       double* out) {
+  const int d = spring_state_doubles(m);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = lo; k < hi; ++k)
+    move_spring_state<true>(m, list ? list[k] : k, out + (k - lo) * d);
+}
+
+void unpack_spring_state(Model& m, const std::int32_t* list, std::int64_t lo, std::int64_t hi,
+                         const double* in) {
+  const int d = spring_state_doubles(m);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t k = lo; k < hi; ++k)
+    move_spring_state<false>(m, list ? list[k] : k, in + (k - lo) * d);
 }
 
 void spring_forces_reference(Model& m, double dt, double t) {
@@ -632,10 +686,11 @@ void spring_forces_reference(Model& m, double dt, double t) {
     m.iface_normal.assign(m.n_ifaces(), Vec3{});
     m.iface_normal_set = false;
   }
+  constexpr auto all = std::numeric_limits<std::int64_t>::max();
   if (m.tied)
-    spring_forces_tied(m, dt, t);
+    spring_forces_tied(m, dt, t, 0, all);
   else
-    spring_forces_generic(m, dt, t);
+    spring_forces_generic(m, dt, t, 0, all);
 }
 
 void gather_spring_forces(Model& m) {

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "cdem/model/model.hpp"
 
@@ -75,7 +76,22 @@ inline bool fe_elastic(const SpringLaw& law, double area, double w, double slip,
 // interfaces; vectorised over chunks of interfaces (springs.cpp) once the previous normals are
 // kept, with the same arithmetic as spring_forces_reference. Tied mode (Model::tied): the active
 // interfaces only, in chunks of that list, tied points skipped.
-void spring_forces(Model& m, double dt, double t);
+// [lo, hi): only these entries of the list the mode steps (tied mode: Model::active_ifaces;
+// springs mode: the interfaces), a rank's share of a distributed run; each interface's results
+// are the same bits whatever the range.
+void spring_forces(Model& m, double dt, double t, std::int64_t lo = 0,
+                   std::int64_t hi = std::numeric_limits<std::int64_t>::max());
+
+// What spring_forces writes of an interface, packed for a distributed run's exchange
+// (parallel/ranks.hpp): its normal and, per spring point, F_n, F_s, state, break mode, break
+// time, dissipated work, and the fracture-energy state when kept (sp_w not empty). Every value
+// converts to a double and back exactly. spring_state_doubles: the doubles per interface.
+int spring_state_doubles(const Model& m);
+// The interfaces list[k] for k in [lo, hi) (list null: interface k) into `out` / from `in`.
+void pack_spring_state(const Model& m, const std::int32_t* list, std::int64_t lo, std::int64_t hi,
+                       double* out);
+void unpack_spring_state(Model& m, const std::int32_t* list, std::int64_t lo, std::int64_t hi,
+                         const double* in);
 
 // The same one interface and one spring point at a time (the reference form the vectorised
 // kernel reproduces bit for bit, in both modes; test_spring_kernel.cpp).

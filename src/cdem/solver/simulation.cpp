@@ -231,8 +231,12 @@ void Simulation::step(bool sample) {
   // 1. positions x(n) = x(n-1) + dt v(n-1/2)
   update_positions(m_, dt_);
   lap(kStepPositions);
-  // 2. spring forces (on x(n), independent of the block forces; tied mode: untied points only)
-  spring_forces(m_, dt_, t_);
+  // 2. spring forces (on x(n), independent of the block forces; tied mode: untied points only);
+  // in a distributed run this rank's share, then shared with the other ranks
+  const std::int64_t released_before = m_.released_points;
+  const auto [s_lo, s_hi] = spring_share();
+  spring_forces(m_, dt_, t_, s_lo, s_hi);
+  if (!rank_blocks_.empty()) share_springs(released_before);
   lap(kStepSprings);
   // 3. block forces (assign f), each block adding its nodes' spring forces right after; in a
   // distributed run this rank's blocks, then shared with the other ranks
@@ -326,6 +330,42 @@ void Simulation::distribute(const std::vector<std::int64_t>& block_first, int ra
   for (auto b : block_first) rank_nodes_.push_back(m_.block_first_node[b]);
   own_lo_ = static_cast<std::int32_t>(block_first[rank]);
   own_hi_ = static_cast<std::int32_t>(block_first[rank + 1]);
+  rank_ = rank;
+  spring_first_.assign(parts + 1, 0);
+  rank_slices_.assign(parts + 1, 0);
+  // every interface's state, and a released-points count per rank
+  spring_buf_.assign(m_.n_ifaces() * spring_state_doubles(m_) + parts, 0.0);
+}
+
+std::pair<std::int64_t, std::int64_t> Simulation::spring_share() {
+  if (rank_blocks_.empty()) return {0, std::numeric_limits<std::int64_t>::max()};
+  // Equal shares of the list (the interfaces cost alike): tied mode the active interfaces, which
+  // every rank holds in the same order (order_active_ifaces), springs mode all interfaces.
+  const std::int64_t n = m_.tied ? static_cast<std::int64_t>(m_.active_ifaces.size())
+                                 : static_cast<std::int64_t>(m_.n_ifaces());
+  const int parts = static_cast<int>(spring_first_.size()) - 1;
+  for (int r = 0; r <= parts; ++r) spring_first_[r] = n * r / parts;
+  return {spring_first_[rank_], spring_first_[rank_ + 1]};
+}
+
+void Simulation::share_springs(std::int64_t released_before) {
+  const int parts = static_cast<int>(spring_first_.size()) - 1;
+  const int d = spring_state_doubles(m_);
+  const std::int32_t* list = m_.tied ? m_.active_ifaces.data() : nullptr;
+  // Rank r's slice: its interfaces' states, then its count of released points.
+  std::vector<std::int64_t>& at = rank_slices_;
+  for (int r = 0; r <= parts; ++r) at[r] = spring_first_[r] * d + r;
+  const std::int64_t lo = spring_first_[rank_], hi = spring_first_[rank_ + 1];
+  pack_spring_state(m_, list, lo, hi, spring_buf_.data() + at[rank_]);
+  spring_buf_[at[rank_ + 1] - 1] = static_cast<double>(m_.released_points - released_before);
+  share_slices(spring_buf_.data(), at, 1);
+  std::int64_t released = 0;
+  for (int r = 0; r < parts; ++r) {
+    if (r != rank_)
+      unpack_spring_state(m_, list, spring_first_[r], spring_first_[r + 1], spring_buf_.data() + at[r]);
+    released += static_cast<std::int64_t>(spring_buf_[at[r + 1] - 1]);
+  }
+  m_.released_points = released_before + released;
 }
 
 std::int64_t Simulation::share_blocks(std::int64_t inverted) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cdem/core/prefetch.hpp"
@@ -178,6 +179,11 @@ class Simulation {
   // The block kernel's results of every rank's blocks to every rank (forces, stress, strain
   // energy, volume ratio); returns the inverted-block count's maximum over the ranks.
   std::int64_t share_blocks(std::int64_t inverted);
+  // This rank's share of the spring kernel's list (all of it on one rank) for this step.
+  std::pair<std::int64_t, std::int64_t> spring_share();
+  // The spring kernel's results of every rank's share to every rank, and the released points'
+  // count (Model::released_points, `released_before` this step's kernel) summed over them.
+  void share_springs(std::int64_t released_before);
   void setup_damping_zones(const Case& c);
   void setup_initial_stress(const Case& c);
 
@@ -214,6 +220,12 @@ class Simulation {
   // Distributed run: the ranks' block and node ranges (empty on one rank), this rank's blocks.
   std::vector<std::int64_t> rank_blocks_, rank_nodes_;
   std::int32_t own_lo_ = 0, own_hi_ = std::numeric_limits<std::int32_t>::max();
+  // The ranks' shares of the spring kernel's list this step (spring_share), and the buffer of
+  // their packed results (pack_spring_state; sized once, at distribute).
+  std::vector<std::int64_t> spring_first_;
+  std::vector<double> spring_buf_;
+  std::vector<std::int64_t> rank_slices_;  // scratch: the slices' offsets in spring_buf_
+  int rank_ = 0;
 };
 
 }  // namespace cdem

@@ -170,6 +170,9 @@ struct ContactSet {
   // pair this step's contact count (prefix sums) and the range of its contacts of the last step
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
+  // per block pair the edge pairs (bit 6 edge of a + edge of b) the count pass found touching
+  // this step: the fill pass tests only those again (sized at the rebuild)
+  std::vector<std::uint64_t> bp_hits;
   // the distinct blocks of the block pairs (ascending; rebuilt), each pair's two indices among
   // them, and per block this step's bounding sphere (centre, radius) and geometry (each computed
   // once per step, not once per pair)

@@ -300,6 +300,7 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_count.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
+  cs.bp_hits.assign(cs.bp_a.size(), 0);
   // room for the contacts without allocating in a step (grown only if a step needs more)
   const std::size_t room = std::max<std::size_t>(64, 2 * static_cast<std::size_t>(cs.ec_active_max));
   for_each_edge_array(cs, [&](auto&, auto& now) { now.reserve(room); });
@@ -418,6 +419,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     }
     const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
     std::int32_t count = 0;
+    std::uint64_t hits = 0;
     for (int ea = 0; ea < 6; ++ea)
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
@@ -425,9 +427,11 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
         // both roles (the edge pair in contact either way round is one contact: A's edge into
         // B or B's into A)
         const bool hit = near && cand && edge_hit_either(A, ea, B, eb, h) != 0;
+        if (hit) hits |= std::uint64_t{1} << edge_key(ea, eb);
         if (hit || find_prev(cs, plo, phi, edge_key(ea, eb)) >= 0) ++count;
       }
     cs.bp_count[j + 1] = count;
+    cs.bp_hits[j] = hits;
   }
   cs.block_pair_tests += tests;
   for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
@@ -454,7 +458,8 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       for (int eb = 0; eb < 6; ++eb) {
         const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
         EdgeHit h;
-        const int role = near && cand ? edge_hit_either(A, ea, B, eb, h) : 0;
+        // the same test as the count pass's, where that found a hit (the others found none)
+        const int role = near && cand && (cs.bp_hits[j] >> edge_key(ea, eb) & 1) ? edge_hit_either(A, ea, B, eb, h) : 0;
         const bool hit = role != 0;
         // the edge pushed along +n is a's (else b's); without a hit, a's unless both roles were
         // tried (which side a kept contact's weights are read from)

@@ -88,7 +88,10 @@ void share_slices(double* data, const std::vector<std::int64_t>& first, int stri
     throw std::logic_error("share_slices: the slices are not one per rank");
   // Counts in doubles: MPI's counts are int. A model whose one array exceeds 2^31 doubles
   // (700 M nodes' forces) is far beyond what replicated state can hold anyway.
-  std::vector<int> count(n), displ(n);
+  // (the counts' buffers are grown once: nothing is allocated in a step after the first)
+  static std::vector<int> count, displ;
+  count.resize(n);
+  displ.resize(n);
   for (int r = 0; r < n; ++r) {
     const std::int64_t c = (first[r + 1] - first[r]) * stride, d = first[r] * stride;
     if (c > std::numeric_limits<int>::max() || d > std::numeric_limits<int>::max())

@@ -1,16 +1,16 @@
 // The processes of a distributed run: MPI ranks (docs/parallel.md).
 //
 // `mpirun -np N cdemblast run CASE` starts N processes of the same program on the same case.
-// Each holds the whole model and steps it; the block kernel, the step's largest loop over the
-// model, is divided among them by contiguous ranges of the blocks' Hilbert order
-// (block_ranges, partition.hpp), and each step the ranks share what their ranges computed
-// (share_slices) before anything reads it. Every value is computed by exactly one rank, with
+// Each holds the whole model and steps it; the block kernel is divided among them by
+// contiguous ranges of the blocks' Hilbert order (block_ranges, partition.hpp) and the spring
+// kernel by equal shares of the list it steps, and each step the ranks share what their shares
+// computed (share_slices) before anything reads it. Every value is computed by exactly one rank, with
 // the same arithmetic as on one rank, and every sum runs over the whole model in its fixed
 // order on every rank: so N ranks give the results of one bit for bit, and every rank holds
 // the same state. Rank 0 writes the output.
 //
 // This is the first stage of issue 17: the state is replicated (a rank's memory is the whole
-// model's), and only the block kernel is divided. docs/parallel.md says what the halo stage
+// model's), and only the block and spring kernels are divided. docs/parallel.md says what the halo stage
 // will change.
 //
 // Without MPI at build time, or when the program was not started by an MPI launcher (no

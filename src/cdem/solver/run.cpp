@@ -414,6 +414,18 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   };
   if (ckpt) {  // (the same case, so the same model sizes and monitors: checked above)
     io_run_state(*ckpt);
+    // Each rank read the newest good checkpoint it found: all must continue from the same one
+    // (else their exchanges would not match and the run would hang).
+    if (rk.size > 1) {
+      const double t = sim.time();
+      std::uint64_t h;
+      std::memcpy(&h, &t, sizeof h);
+      if (!same_over_ranks(h ^ (static_cast<std::uint64_t>(sim.steps()) * 0x9E3779B97F4A7C15ull)))
+        throw InputError(fmt::format("--restart {}: the ranks found different checkpoints (rank {} "
+                                     "continues from step {}); every rank must read the same run "
+                                     "directory, on a shared file system",
+                                     opt.out_dir, rk.rank, sim.steps()));
+    }
     wall_before = wall_so_far;
     loop_before = loop_so_far;
     if (!opt.quiet)

@@ -298,6 +298,10 @@ int cli_main(int argc, char** argv) {
                     "With --case: untimed steps before the timed ones (default 0)")
       ->check(CLI::Range(static_cast<std::int64_t>(0), static_cast<std::int64_t>(100000000)));
 
+  std::string bench_export;
+  bench->add_option("--export", bench_export,
+                    "Instead of timing: write the box (--blocks, --law, --interfaces) as a case, "
+                    "DIR/case.toml and DIR/bench.msh, to run it as a whole process or under mpirun");
   bench->add_option("--partition", bench_opt.partition_parts,
                     "Scale projection instead of timing: partition the box (METIS) into these "
                     "part counts, e.g. 16,64,256,1024, and project the exchange (docs/parallel.md)")
@@ -354,6 +358,13 @@ int cli_main(int argc, char** argv) {
         fmt::print(stderr, "error: bench: --law, --blocks and --warmup-broken are for the built-in "
                            "model; with --case set its keys with --set\n");
         return 2;
+      }
+      if (!bench_export.empty()) {
+        if (!bench_opt.case_path.empty()) {
+          fmt::print(stderr, "error: bench: --export writes the built-in box; it does not go with --case\n");
+          return 2;
+        }
+        return cdem::export_bench_case(bench_opt, bench_export);
       }
       if (!bench_opt.partition_parts.empty()) return cdem::run_partition_projection(bench_opt);
       return cdem::run_bench(bench_opt);

@@ -87,5 +87,18 @@ expect_error "--from a directory without checkpoints" "--from $TMP: no checkpoin
 expect_error "--from another case's run" "differs from the one of the checkpointed run" \
   --case "$ROOT/examples/single_hole_2d/solid.toml" --from "$TMP/run"
 expect_error "a missing case" "missing.toml" --case "$TMP/missing.toml"
-echo "bad options: 8 refused with exit 2"
+expect_error "--export with --case" "does not go with --case" --case "$CASE" --export "$TMP/box"
+echo "bad options: 9 refused with exit 2"
+
+# --export: the box as a case that `check` and `run` take (the same model as the bench's: its
+# block count), and that reads back with its mesh next to it.
+"$BIN" bench --export "$TMP/box" --blocks 3000 > "$TMP/export.out" || fail "bench --export"
+[ -s "$TMP/box/bench.msh" ] && [ -s "$TMP/box/case.toml" ] || fail "bench --export wrote no case"
+n=$(sed -n 's/^bench box: \([0-9]*\) tetrahedra.*/\1/p' "$TMP/export.out")
+[ -n "$n" ] || fail "bench --export: no block count in '$(cat "$TMP/export.out")'"
+"$BIN" check "$TMP/box/case.toml" > "$TMP/check.out" 2>&1 || { cat "$TMP/check.out"; fail "check of the exported box"; }
+grep -q "^blocks *$n\$" "$TMP/check.out" || fail "exported box: not $n blocks ($(grep ^blocks "$TMP/check.out"))"
+"$BIN" run "$TMP/box/case.toml" -o "$TMP/box_run" -q -t 1 --set simulation.end_time=2e-5 ||
+  fail "run of the exported box"
+echo "export: the box as a case, $n blocks, checked and run"
 echo "1 passed, 0 failed"

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <ctime>
 #include <memory>
 #include <utility>
@@ -16,6 +17,7 @@
 #include "cdem/explosive/charges.hpp"
 #include "cdem/explosive/explosive_library.hpp"
 #include "cdem/mesh/element_geometry.hpp"
+#include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/mesh/topology.hpp"
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/mesh/structured.hpp"
@@ -432,6 +434,34 @@ LoopResult best_loop(const PreparedCase& snapshot, int steps, int threads, int r
 }
 
 }  // namespace
+
+int export_bench_case(const BenchOptions& opt, const std::string& dir) {
+  const double h = 0.05;
+  const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, opt.blocks));
+  const Vec3 extent{h * cells[0], h * cells[1], h * cells[2]};
+  Case c = bench::box_case(3, extent, h, opt.law, 1);
+  c.title = "bench_box";
+  c.contact.enabled = opt.contact;
+  if (opt.interfaces == "springs") c.interface_mode = InterfaceMode::Springs;
+  c.end_time = 2e-4;
+  c.output_times = {1e-4};
+  c.history_interval = 2e-6;
+  std::filesystem::create_directories(dir);
+  const auto msh = std::filesystem::path(dir) / "bench.msh";
+  write_gmsh(bench::structured_tet_box(cells[0], cells[1], cells[2], h), msh.string());
+  c.mesh_file = "bench.msh";  // (relative to the case file)
+  c.path = "cdemblast bench --export";
+  const auto toml = std::filesystem::path(dir) / "case.toml";
+  std::FILE* f = std::fopen(toml.string().c_str(), "w");
+  if (!f) throw std::runtime_error(fmt::format("bench --export: cannot write '{}'", toml.string()));
+  const std::string text = resolved_case_toml(c);
+  const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  if (std::fclose(f) != 0 || !ok) throw std::runtime_error(fmt::format("bench --export: cannot write '{}'", toml.string()));
+  const Case back = load_case(toml.string(), {});  // it must read back as a valid case
+  fmt::print("bench box: {} tetrahedra, written as {} and {}; run it with\n  cdemblast run {}\n",
+             6LL * cells[0] * cells[1] * cells[2], toml.string(), msh.string(), toml.string());
+  return back.end_time > 0 ? 0 : 1;
+}
 
 int run_bench(const BenchOptions& opt) {
   const int threads = opt.threads > 0 ? opt.threads : omp_get_max_threads();

@@ -61,6 +61,11 @@ int run_partition_projection(const BenchOptions& opt);
 // Runs the benchmark and prints its report on stdout. Returns 0.
 int run_bench(const BenchOptions& opt);
 
+// Writes the bench box (opt.blocks, opt.law, opt.interfaces, opt.contact) as a case that `run`
+// takes, so that it can be run as a whole process (under mpirun too): `dir`/bench.msh (MSH 4.1)
+// and `dir`/case.toml (every key written; 0.2 ms of its bar's blast, 3 field outputs). Returns 0.
+int export_bench_case(const BenchOptions& opt, const std::string& dir);
+
 namespace bench {
 
 // ---- reproducible structured models (no Gmsh) ----

@@ -105,3 +105,18 @@ for d in 3d_c 3d_r; do
 done
 same "$TMP/3d_c" "$TMP/3d_r"
 echo "restart: written by 2 ranks, continued on 3: identical to 1 rank uninterrupted"
+
+# Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
+# a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets
+# it, the others are already in the first exchange), a command that does not run on ranks.
+expect_refused() {
+  local what=$1 pattern=$2 rc=0
+  shift 2
+  timeout 120 "${MPIRUN[@]}" -np 2 "$BIN" "$@" > "$TMP/err.out" 2> "$TMP/err.log" || rc=$?
+  [ "$rc" = 2 ] || { cat "$TMP/err.log"; fail "$what: exit $rc, expected 2 (124: it hung)"; }
+  grep -q -- "$pattern" "$TMP/err.log" || { cat "$TMP/err.log"; fail "$what: no message '$pattern'"; }
+}
+expect_refused "a missing case" "cannot open case file" run "$TMP/missing.toml" -o "$TMP/x" -q
+expect_refused "an occupied run directory" "holds the results of another run" run "${C2[@]}" -o "$TMP/2d_1" -q
+expect_refused "report on ranks" "only run, resume and check" report "$TMP/2d_1"
+echo "errors on 2 ranks: exit 2 with the message, no hang"

@@ -57,10 +57,12 @@ int run_threads(const Case& c, int requested) {
   const int procs = std::max(1, available_processors() / ranks().local_size);
   if (asked <= 0) return procs;
   if (asked > procs) {
-    spdlog::warn("{}: {} threads asked ({}), this machine has {} processors: using {} (the "
+    const std::string share =
+        ranks().local_size > 1 ? fmt::format(" for each of its {} ranks", ranks().local_size) : "";
+    spdlog::warn("{}: {} threads asked ({}), this machine has {} processors{}: using {} (the "
                  "results do not depend on the thread count)",
                  c.path, asked, requested > 0 ? "--threads" : "key 'simulation.threads'", procs,
-                 procs);
+                 share, procs);
     return procs;
   }
   return asked;

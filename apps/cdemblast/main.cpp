@@ -191,7 +191,6 @@ void print_error(const char* what) {
   fmt::print(stderr, "error: {}\n", what);
 }
 
-
 int cli_main(int argc, char** argv) {
   CLI::App app{"cdemblast: rock blasting with the continuous-discontinuous element method"};
   app.set_version_flag("--version", fmt::format("cdemblast {} (MPI: {}, METIS: {})", CDEM_VERSION,

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <ctime>
+#include <filesystem>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -457,10 +457,10 @@ int export_bench_case(const BenchOptions& opt, const std::string& dir) {
   const std::string text = resolved_case_toml(c);
   const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   if (std::fclose(f) != 0 || !ok) throw std::runtime_error(fmt::format("bench --export: cannot write '{}'", toml.string()));
-  const Case back = load_case(toml.string(), {});  // it must read back as a valid case
+  load_case(toml.string(), {});  // it must read back as a valid case (throws if not)
   fmt::print("bench box: {} tetrahedra, written as {} and {}; run it with\n  cdemblast run {}\n",
              6LL * cells[0] * cells[1] * cells[2], toml.string(), msh.string(), toml.string());
-  return back.end_time > 0 ? 0 : 1;
+  return 0;
 }
 
 int run_bench(const BenchOptions& opt) {

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 
 #include "cdem/analysis/blast_quality.hpp"
@@ -138,22 +139,27 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
   return {};
 }
 
-}  // namespace
-
-// The bits of an energy balance's terms mixed into one word (FNV-1a): the ranks' agreement
-// check of a distributed run. Every term is a sum over the whole model, so a rank whose state
-// differs in any block moves at least one of them.
-std::uint64_t energy_bits(const EnergyBalance& e) {
+// The bits of some doubles mixed into one word (FNV-1a), for the ranks of a distributed run to
+// check that they agree (same_over_ranks).
+std::uint64_t hash_bits(std::initializer_list<double> xs) {
   std::uint64_t h = 1469598103934665603ull;
-  for (double x : {e.kinetic, e.block_strain, e.spring_strain, e.fracture, e.damping,
-                   e.external_work, e.explosive_work, e.gravity_work, e.contact_strain,
-                   e.contact_friction, e.insertion}) {
+  for (double x : xs) {
     std::uint64_t u;
     std::memcpy(&u, &x, sizeof u);
     h = (h ^ u) * 1099511628211ull;
   }
   return h;
 }
+
+// The energy terms' bits: every term is a sum over the whole model, so a rank whose state
+// differs in any block moves at least one of them.
+std::uint64_t energy_bits(const EnergyBalance& e) {
+  return hash_bits({e.kinetic, e.block_strain, e.spring_strain, e.fracture, e.damping,
+                    e.external_work, e.explosive_work, e.gravity_work, e.contact_strain,
+                    e.contact_friction, e.insertion});
+}
+
+}  // namespace
 
 // When no finite stable time step exists, say which material or block makes it so (the
 // Simulation would only say there is none).
@@ -418,16 +424,12 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     io_run_state(*ckpt);
     // Each rank read the newest good checkpoint it found: all must continue from the same one
     // (else their exchanges would not match and the run would hang).
-    if (rk.size > 1) {
-      const double t = sim.time();
-      std::uint64_t h;
-      std::memcpy(&h, &t, sizeof h);
-      if (!same_over_ranks(h ^ (static_cast<std::uint64_t>(sim.steps()) * 0x9E3779B97F4A7C15ull)))
-        throw InputError(fmt::format("--restart {}: the ranks found different checkpoints (rank {} "
-                                     "continues from step {}); every rank must read the same run "
-                                     "directory, on a shared file system",
-                                     opt.out_dir, rk.rank, sim.steps()));
-    }
+    // (the step count below 2^53 (check_run_size): exact as a double)
+    if (rk.size > 1 && !same_over_ranks(hash_bits({sim.time(), static_cast<double>(sim.steps())})))
+      throw InputError(fmt::format("--restart {}: the ranks found different checkpoints (rank {} "
+                                   "continues from step {}); every rank must read the same run "
+                                   "directory, on a shared file system",
+                                   opt.out_dir, rk.rank, sim.steps()));
     wall_before = wall_so_far;
     loop_before = loop_so_far;
     if (!opt.quiet)

@@ -166,10 +166,15 @@ double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* a
   return w;
 }
 
-double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed, double* after,
+double load_work(const Model& m, Boundaries& b, double dt, double* absorbed, double* after,
                  double* absorbed_after) {
-  double w = 0, d = 0, wa = 0, da = 0;
-  for (std::size_t i = 0; i < b.work_nodes.size(); ++i) {
+  // Each node's four terms formed in parallel (the velocities were just written by every
+  // thread), then summed serially in node order: the same sums for any thread count.
+  const auto nw = static_cast<std::int64_t>(b.work_nodes.size());
+  b.work_terms.resize(4 * static_cast<std::size_t>(nw));
+  double* const terms = b.work_terms.data();
+#pragma omp parallel for schedule(static) if (nw > 1024)
+  for (std::int64_t i = 0; i < nw; ++i) {
     // The node's pressure and dashpot forces of the step, summed from the facet forces (kept
     // in load_force until the next boundary_forces) in the serial order.
     Vec3 fl{}, fd{};
@@ -180,12 +185,19 @@ double load_work(const Model& m, const Boundaries& b, double dt, double* absorbe
       else
         fd += b.load_force[entry];
     }
-    const Vec3 vmid = 0.5 * (b.v_old[i] + m.v[b.work_nodes[i]]);
-    w += dot(fl, vmid) * dt;
-    d -= dot(fd, vmid) * dt;
     const Vec3 v1 = m.v[b.work_nodes[i]];
-    wa += 0.5 * dt * dot(fl, v1);
-    da -= 0.5 * dt * dot(fd, v1);
+    const Vec3 vmid = 0.5 * (b.v_old[i] + v1);
+    terms[4 * i] = dot(fl, vmid) * dt;
+    terms[4 * i + 1] = dot(fd, vmid) * dt;
+    terms[4 * i + 2] = 0.5 * dt * dot(fl, v1);
+    terms[4 * i + 3] = 0.5 * dt * dot(fd, v1);
+  }
+  double w = 0, d = 0, wa = 0, da = 0;
+  for (std::int64_t i = 0; i < nw; ++i) {
+    w += terms[4 * i];
+    d -= terms[4 * i + 1];
+    wa += terms[4 * i + 2];
+    da -= terms[4 * i + 3];
   }
   if (absorbed) *absorbed = d;
   if (after) *after = wa;

@@ -42,6 +42,7 @@ struct Boundaries {
   // work_nodes + 1). Every node's force is summed in this order whatever the thread count.
   std::vector<std::int32_t> node_load_offset, node_load_entry;
   std::vector<Vec3> load_force;  // per load facet and node q, the step's force (3 per facet)
+  std::vector<double> work_terms;  // load_work's four terms per work node (grown once)
   // The constraints ordered by node (then by their order in `constraints`): con_node[k] is the
   // node of constraints[con_order[k]] (constrain_velocity's binary search; tied mode).
   std::vector<std::int32_t> con_node, con_order;
@@ -67,7 +68,7 @@ double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* a
 
 // Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0), and
 // the parts of each after t_n, 1/2 dt F . v(n+1/2) (*after, *absorbed_after).
-double load_work(const Model& m, const Boundaries& b, double dt, double* absorbed, double* after,
+double load_work(const Model& m, Boundaries& b, double dt, double* absorbed, double* after,
                  double* absorbed_after);
 
 }  // namespace cdem

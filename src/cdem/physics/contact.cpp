@@ -193,15 +193,21 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   double vmax = 0;
   if (release_pending || !cs.pair_node.empty()) {
     const auto nbk = static_cast<std::int64_t>(m.n_blocks());
+    const auto ngrp = static_cast<std::int64_t>(cs.grp_speed.size());
     const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
 #pragma omp parallel for schedule(static) reduction(max : vmax)
-    for (std::int64_t b = 0; b < nbk; ++b) {
-      if (skip && skip[b]) continue;
-      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
-        const double vn = std::sqrt(dot(m.v[n], m.v[n]));
-        cs.node_drift[n] += vn * dt;
-        vmax = std::max(vmax, vn);
+    for (std::int64_t g = 0; g < ngrp; ++g) {
+      double vg = 0;  // (the group's largest speed: the sleep's local clocks, below)
+      for (std::int64_t b = g * kSleepGroup; b < std::min(nbk, (g + 1) * kSleepGroup); ++b) {
+        if (skip && skip[b]) continue;
+        for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+          const double vn = std::sqrt(dot(m.v[n], m.v[n]));
+          cs.node_drift[n] += vn * dt;
+          vg = std::max(vg, vn);
+        }
       }
+      cs.grp_speed[g] = vg;
+      vmax = std::max(vmax, vg);
     }
   }
   bool due = first_build;
@@ -224,6 +230,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // pairs that stay keep their wakes, contact_broad_phase.cpp)
   cs.drift_all += vmax * dt;
   if (due) rebuild_contact_pairs(m, cs);
+  // The groups' clocks: each grows by the largest |v| dt of its own nodes and of its pairs'
+  // blocks (the groups listed at the rebuild: those of every pair now).
+  {
+    const auto ngrp = static_cast<std::int64_t>(cs.grp_clock.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t g = 0; g < ngrp; ++g) {
+      double v = 0;
+      for (auto i = cs.grp_nbr_start[g]; i < cs.grp_nbr_start[g + 1]; ++i) v = std::max(v, cs.grp_speed[cs.grp_nbr[i]]);
+      cs.grp_clock[g] += v * dt;
+    }
+  }
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
   if (npair == 0) {
     std::int64_t none = 0;
@@ -316,11 +333,16 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.near_count.size() < want)
     cs.near_count.assign(want, 0);
   // A pair asleep by the test above with slack S (its wake bound less D_n + kSleepRate max_i D_i
-  // now) cannot wake before drift_all has grown by S / (1 + kSleepRate): each node's path length
-  // grows by at most drift_all's increment. So it is not looked at until then (one load instead of
-  // the node's and the block's drift bounds). A near pair is looked at every step. (0.999: the
-  // path lengths are sums rounded differently.)
-  const double drift_all = cs.drift_all;
+  // now) cannot wake before its node's group clock has grown by S / (1 + kSleepRate): the path
+  // length of its node and of each node of its block grows by at most that clock's increment.
+  // So it is not looked at until then (one load instead of the node's and the block's drift
+  // bounds, the clock read once per group). A near pair is looked at every step. (0.999: the
+  // path lengths are sums rounded differently.) Until 4 Dec 2026 the clock was drift_all, the
+  // fastest node's path anywhere: in the late SPEC 5.3 cylinder a pair woke every ~11 steps on
+  // it, though its own bound held, as fragments flew at 165 m/s elsewhere.
+  const double* const clock = cs.grp_clock.data();
+  const std::int32_t* const gstart = cs.grp_pair_start.data();
+  const auto ngrp = static_cast<std::int32_t>(cs.grp_clock.size());
   const bool sleep = cs.cfg.sleep;
   // (the arrays through local pointers: a store to a byte array may alias anything, and the
   // compiler reloaded every vector's data pointer after each)
@@ -340,10 +362,16 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     // 1. The pairs awake this step (most pairs are asleep on drift_all), listed at the start of
     // the range without a branch: a streaming pass of one byte and one float per pair.
     std::int64_t nawake = 0;
-    for (std::int64_t p = lo; p < hi; ++p) {
-      scratch[lo + nawake] = static_cast<std::int32_t>(p);
-      nawake += (kf_[p] >= 0) | !(sleep && drift_all < static_cast<double>(gwake[p]));
+    // (the group of the range's first pair: the last whose pairs start at or before it)
+    const std::int32_t g_lo = static_cast<std::int32_t>(std::upper_bound(gstart, gstart + ngrp + 1, lo) - gstart) - 1;
+    for (std::int32_t g = std::max(g_lo, 0); g < ngrp && gstart[g] < hi; ++g) {
+      const double c = clock[g];
+      for (std::int64_t p = std::max<std::int64_t>(lo, gstart[g]); p < std::min<std::int64_t>(hi, gstart[g + 1]); ++p) {
+        scratch[lo + nawake] = static_cast<std::int32_t>(p);
+        nawake += (kf_[p] >= 0) | !(sleep && c < static_cast<double>(gwake[p]));
+      }
     }
+    std::int32_t g = std::max(g_lo, 0);  // (the awake pairs' group, walking up with them)
     // 2. The awake pairs, their scattered data prefetched a few pairs ahead (the block planes
     // above all: 4 cache lines per block, 2 MB for the late SPEC 5.3 state). The near ones are
     // written over the list's consumed head, in pair order.
@@ -383,7 +411,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       const double slack = near ? -1.0 : pwake[p] - (drift[n] + kSleepRate * cbd[2 * j + 1]);
       // (rounded down to a float: the pair may wake a little early, never late)
-      const double wake = slack > 0 ? drift_all + 0.999 * slack / (1 + kSleepRate) : -1.0;
+      while (gstart[g + 1] <= p) ++g;
+      const double wake = slack > 0 ? clock[g] + 0.999 * slack / (1 + kSleepRate) : -1.0;
       float wf = static_cast<float>(wake);
       if (static_cast<double>(wf) > wake) wf = std::nextafter(wf, -std::numeric_limits<float>::infinity());
       gwake[p] = wf;
@@ -739,7 +768,8 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
            cs.near, cs.near_group, cs.near_scratch, cs.pair_off, cs.pair_wake, cs.node_drift,
-           cs.pair_gwake, cs.cb_pair_start, cs.cb_pair,
+           cs.pair_gwake, cs.cb_pair_start, cs.cb_pair, cs.grp_speed, cs.grp_clock, cs.grp_pair_start,
+           cs.grp_nbr_start, cs.grp_nbr,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
            cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand) +
          b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.bp_hits, cs.eb_block, cs.bp_ia, cs.bp_ib,

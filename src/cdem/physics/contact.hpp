@@ -150,8 +150,18 @@ struct ContactSet {
   // and pairs sleep on one number: drift_all is the sum over the steps (as long) of the
   // largest |v| dt of any node (no node's path length grew by more)
   double drift_all = 0;
-  std::vector<float> pair_gwake;   // per pair: the drift_all before which it is not tested again
-                                   // (rounded down: a float halves the step's streaming pass)
+  std::vector<float> pair_gwake;   // per pair: the clock of its node's group (below) before which
+                                   // it is not tested again (rounded down: a float halves the
+                                   // step's streaming pass)
+  // Local clocks for that streaming pass (contact.cpp, kSleepGroup): the blocks in groups of
+  // kSleepGroup consecutive ones (the mesh is in Hilbert order, so a group is a compact lump of
+  // rock); per group this step's largest node speed, and, per group holding pairs' nodes, the
+  // groups of those nodes and of their pairs' blocks (CSR, at the rebuild) and a clock, the sum
+  // over the steps of the largest |v| dt among them (no path length of a node or a block of its
+  // pairs grew by more). Where drift_all follows the fastest fragment anywhere, a group's clock
+  // follows only the motion near it.
+  std::vector<double> grp_speed, grp_clock;
+  std::vector<std::int32_t> grp_pair_start, grp_nbr_start, grp_nbr;
   // per candidate block, its pairs (CSR): woken when the block's tolerance reach is over the cap
   std::vector<std::int32_t> cb_pair_start, cb_pair;
   std::vector<std::int64_t> near_count;
@@ -224,6 +234,9 @@ struct ContactSet {
 double simplex_tolerance_reach(ElemType t, const Vec3* x, const std::array<Vec3, 4>& a0,
                                const std::array<Vec3, 4>& n, double tol);
 constexpr double kContactRhoCap = 20.0;
+// The blocks per group of the sleep's local clocks (ContactSet::grp_clock): 16 tetrahedra, 64
+// nodes, a lump of about 2.5 block sizes across in the Hilbert-ordered mesh.
+constexpr std::int64_t kSleepGroup = 16;
 
 // Set-up from the model (its interface materials give the friction, the stiffness budget as in
 // ties.hpp / springs.hpp). omega2_max: the blocks' omega_max^2 (tied mode), 0 in springs mode.

@@ -277,6 +277,8 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
 void reset_contact_sleep(const Model& m, ContactSet& cs) {
   cs.node_drift.assign(m.n_nodes(), 0.0);
   cs.drift_all = 0;
+  cs.grp_clock.assign((m.n_blocks() + kSleepGroup - 1) / kSleepGroup, 0.0);
+  cs.grp_speed.assign(cs.grp_clock.size(), 0.0);
   std::fill(cs.pair_wake.begin(), cs.pair_wake.end(), 0.0);
   std::fill(cs.pair_gwake.begin(), cs.pair_gwake.end(), 0.0f);
   std::fill(cs.bp_wake.begin(), cs.bp_wake.end(), 0.0);
@@ -317,6 +319,43 @@ void index_pairs(const Model& m, ContactSet& cs) {
     for (std::size_t p = 0; p < npair; ++p) cs.cb_pair[fill[cs.pair_cb[p]]++] = static_cast<std::int32_t>(p);
   }
   cs.cb_drift.assign(2 * cs.cblock.size(), 0.0);
+  // The sleep's groups (contact.cpp): the pairs of each group's nodes (a range: the pairs are
+  // sorted by node, and the nodes of a block are consecutive), and the groups whose speeds bound
+  // the motion of those nodes and of their pairs' blocks (the group itself first, then the
+  // blocks' groups, ascending and distinct).
+  {
+    const std::size_t ng = (m.n_blocks() + kSleepGroup - 1) / kSleepGroup;
+    if (cs.grp_clock.size() != ng) {  // (the first index: no pair has a wake on a clock yet)
+      cs.grp_clock.assign(ng, 0.0);
+      cs.grp_speed.assign(ng, 0.0);
+    }
+    cs.grp_pair_start.assign(ng + 1, 0);
+    cs.grp_nbr_start.assign(ng + 1, 0);
+    cs.grp_nbr.clear();
+    std::vector<std::int32_t> nbr;
+    std::int32_t b = 0;  // the block of the pair's node, found by walking up (the nodes ascend)
+    std::size_t p = 0;
+    for (std::size_t g = 0; g < ng; ++g) {
+      cs.grp_pair_start[g] = static_cast<std::int32_t>(p);
+      nbr.clear();
+      for (; p < npair; ++p) {
+        const std::int32_t n = cs.pair_node[p];
+        while (m.block_first_node[b + 1] <= n) ++b;
+        if (static_cast<std::size_t>(b) / kSleepGroup != g) break;
+        nbr.push_back(cs.pair_block[p] / kSleepGroup);
+      }
+      if (nbr.empty()) {
+        cs.grp_nbr_start[g + 1] = static_cast<std::int32_t>(cs.grp_nbr.size());
+        continue;
+      }
+      cs.grp_nbr.push_back(static_cast<std::int32_t>(g));
+      std::sort(nbr.begin(), nbr.end());
+      for (std::size_t i = 0; i < nbr.size(); ++i)
+        if (nbr[i] != static_cast<std::int32_t>(g) && (i == 0 || nbr[i] != nbr[i - 1])) cs.grp_nbr.push_back(nbr[i]);
+      cs.grp_nbr_start[g + 1] = static_cast<std::int32_t>(cs.grp_nbr.size());
+    }
+    cs.grp_pair_start[ng] = static_cast<std::int32_t>(npair);
+  }
   cs.face_touched.reserve(4 * cs.cblock.size());
   cs.face_sum.reserve(4 * cs.cblock.size());
   cs.near.reserve(npair);

@@ -357,10 +357,22 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     return sleep && cs.bp_prev_n[j] == 0 &&
            cs.eb_drift[2 * cs.bp_ia[j] + 1] + cs.eb_drift[2 * cs.bp_ib[j] + 1] < cs.bp_wake[j];
   };
+  // (in parallel: a block's mark goes from 0 to 1 only, whichever pair sets it, and a 2 stays)
+  std::uint8_t* const need = cs.eb_need.data();
+  auto mark = [need](std::int32_t i) {
+    std::uint8_t v;
+#pragma omp atomic read relaxed
+    v = need[i];
+    if (v == 0) {
+#pragma omp atomic write relaxed
+      need[i] = 1;
+    }
+  };
+#pragma omp parallel for schedule(static)
   for (std::int64_t j = 0; j < nbp; ++j)
     if (!asleep(j)) {
-      if (cs.eb_need[cs.bp_ia[j]] == 0) cs.eb_need[cs.bp_ia[j]] = 1;
-      if (cs.eb_need[cs.bp_ib[j]] == 0) cs.eb_need[cs.bp_ib[j]] = 1;
+      mark(cs.bp_ia[j]);
+      mark(cs.bp_ib[j]);
     }
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i)

@@ -80,25 +80,10 @@ struct AppliedLoads {
   }
   // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
   // (power[i] for load first + i): the forces and power_old summed in the record's order.
-  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t r = first + i;
-      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
-        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
-        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
-      }
-      m.f[pair_b[r]] += pair_force[r];
-      m.f[pair_a[r]] -= pair_force[r];
-      power_old += power[i];
-    }
-  }
+  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power);
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
-  double power_now(const Model& m) const {
-    double p = 0;
-    for (std::size_t i = 0; i < node.size(); ++i) p += dot(force[i], m.v[node[i]]);
-    for (std::size_t i = 0; i < pair_b.size(); ++i) p += dot(pair_force[i], m.v[pair_b[i]] - m.v[pair_a[i]]);
-    return p;
-  }
+  double power_now(const Model& m);
+  std::vector<double> terms;  // power_now's per-load terms (grown once)
 };
 
 // An extra load applied every step after the block and spring forces (the explosive models

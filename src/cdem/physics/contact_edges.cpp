@@ -169,26 +169,30 @@ int edge_hit_either(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit&
   if (!ok_ab && !ok_ba) return 0;
   const double s = (b * f - c * e) / den, t = (a * f - b * c) / den;
   if (!(s > 0.01 && s < 0.99 && t > 0.01 && t < 0.99)) return 0;
+  // Either role needs A's point inside B and B's inside A: tested first, it rejects about nine
+  // in ten of the edge pairs that get this far (late SPEC 5.3 state), before the normal is formed.
+  // (The same tests as the roles made after their own; the results are the same bit for bit.)
+  const Vec3 pa = p0 + s * da, pb = q0 + t * db;
+  if (!inside(B, pa) || !inside(A, pb)) return 0;
   const Vec3 n0 = normalized(cross(da, db));
   const Vec3 ma = A.n[kTetEdgeFaces[ea][0]] + A.n[kTetEdgeFaces[ea][1]];
   const Vec3 mb = B.n[kTetEdgeFaces[eb][0]] + B.n[kTetEdgeFaces[eb][1]];
-  const Vec3 pa = p0 + s * da, pb = q0 + t * db;
   // one role, P's edge into Q: xp, xq the closest points on P's and Q's edges, sp, sq their
-  // weights, mp, mq the sums of P's and Q's face normals at their edges
-  auto role = [&](Vec3 n, const TetGeom& P, const TetGeom& Q, Vec3 xp, Vec3 xq, double sp, double sq,
-                  Vec3 mp, Vec3 mq) {
+  // weights, mp, mq the sums of P's and Q's face normals at their edges (xp inside Q and xq
+  // inside P: tested above)
+  auto role = [&](Vec3 n, Vec3 xp, Vec3 xq, double sp, double sq, Vec3 mp, Vec3 mq) {
     if (dot(n, mq) < 0) n = -1.0 * n;
     if (!(dot(n, mp) < 0)) return false;
     const double d = dot(xq - xp, n);
-    if (!(d > 0) || !inside(Q, xp) || !inside(P, xq)) return false;
+    if (!(d > 0)) return false;
     h.s = sp;
     h.t = sq;
     h.d = d;
     h.n = n;
     return true;
   };
-  if (ok_ab && role(n0, A, B, pa, pb, s, t, ma, mb)) return 1;
-  if (ok_ba && role(-1.0 * n0, B, A, pb, pa, t, s, mb, ma)) return 2;
+  if (ok_ab && role(n0, pa, pb, s, t, ma, mb)) return 1;
+  if (ok_ba && role(-1.0 * n0, pb, pa, t, s, mb, ma)) return 2;
   return 0;
 }
 

@@ -322,7 +322,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   // The sleep's groups (contact.cpp): the pairs of each group's nodes (a range: the pairs are
   // sorted by node, and the nodes of a block are consecutive), and the groups whose speeds bound
   // the motion of those nodes and of their pairs' blocks (the group itself first, then the
-  // blocks' groups, ascending and distinct).
+  // blocks' groups, distinct, in the order of the pairs).
   {
     const std::size_t ng = (m.n_blocks() + kSleepGroup - 1) / kSleepGroup;
     if (cs.grp_clock.size() != ng) {  // (the first index: no pair has a wake on a clock yet)
@@ -332,26 +332,21 @@ void index_pairs(const Model& m, ContactSet& cs) {
     cs.grp_pair_start.assign(ng + 1, 0);
     cs.grp_nbr_start.assign(ng + 1, 0);
     cs.grp_nbr.clear();
-    std::vector<std::int32_t> nbr;
+    std::vector<std::int32_t> stamp(ng, -1);  // (per group the last group that listed it)
     std::int32_t b = 0;  // the block of the pair's node, found by walking up (the nodes ascend)
     std::size_t p = 0;
     for (std::size_t g = 0; g < ng; ++g) {
+      const auto gi = static_cast<std::int32_t>(g);
       cs.grp_pair_start[g] = static_cast<std::int32_t>(p);
-      nbr.clear();
+      const std::size_t first = cs.grp_nbr.size();
       for (; p < npair; ++p) {
         const std::int32_t n = cs.pair_node[p];
         while (m.block_first_node[b + 1] <= n) ++b;
         if (static_cast<std::size_t>(b) / kSleepGroup != g) break;
-        nbr.push_back(cs.pair_block[p] / kSleepGroup);
+        if (cs.grp_nbr.size() == first) stamp[g] = gi, cs.grp_nbr.push_back(gi);  // (itself first)
+        const auto h = static_cast<std::int32_t>(cs.pair_block[p] / kSleepGroup);
+        if (stamp[h] != gi) stamp[h] = gi, cs.grp_nbr.push_back(h);
       }
-      if (nbr.empty()) {
-        cs.grp_nbr_start[g + 1] = static_cast<std::int32_t>(cs.grp_nbr.size());
-        continue;
-      }
-      cs.grp_nbr.push_back(static_cast<std::int32_t>(g));
-      std::sort(nbr.begin(), nbr.end());
-      for (std::size_t i = 0; i < nbr.size(); ++i)
-        if (nbr[i] != static_cast<std::int32_t>(g) && (i == 0 || nbr[i] != nbr[i - 1])) cs.grp_nbr.push_back(nbr[i]);
       cs.grp_nbr_start[g + 1] = static_cast<std::int32_t>(cs.grp_nbr.size());
     }
     cs.grp_pair_start[ng] = static_cast<std::int32_t>(npair);

@@ -226,12 +226,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     }
     due = moved != 0;
   }
-  // (drift_all grows by the step's largest motion whether or not the pairs are rebuilt: the
-  // pairs that stay keep their wakes, contact_broad_phase.cpp)
-  cs.drift_all += vmax * dt;
   if (due) rebuild_contact_pairs(m, cs);
   // The groups' clocks: each grows by the largest |v| dt of its own nodes and of its pairs'
-  // blocks (the groups listed at the rebuild: those of every pair now).
+  // blocks (the groups listed at the rebuild: those of every pair now), whether or not the pairs
+  // were rebuilt (the pairs that stay keep their wakes, contact_broad_phase.cpp).
   {
     const auto ngrp = static_cast<std::int64_t>(cs.grp_clock.size());
 #pragma omp parallel for schedule(static)
@@ -337,7 +335,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // length of its node and of each node of its block grows by at most that clock's increment.
   // So it is not looked at until then (one load instead of the node's and the block's drift
   // bounds, the clock read once per group). A near pair is looked at every step. (0.999: the
-  // path lengths are sums rounded differently.) Until 4 Dec 2026 the clock was drift_all, the
+  // path lengths are sums rounded differently.) Until 4 Dec 2026 the clock was one for all, the
   // fastest node's path anywhere: in the late SPEC 5.3 cylinder a pair woke every ~11 steps on
   // it, though its own bound held, as fragments flew at 165 m/s elsewhere.
   const double* const clock = cs.grp_clock.data();
@@ -359,7 +357,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const auto t = static_cast<std::int64_t>(omp_get_thread_num());
     const auto nt = static_cast<std::int64_t>(omp_get_num_threads());
     const std::int64_t lo = npair * t / nt, hi = npair * (t + 1) / nt;
-    // 1. The pairs awake this step (most pairs are asleep on drift_all), listed at the start of
+    // 1. The pairs awake this step (most pairs are asleep on their group's clock), listed at the start of
     // the range without a branch: a streaming pass of one byte and one float per pair.
     std::int64_t nawake = 0;
     // (the group of the range's first pair: the last whose pairs start at or before it)

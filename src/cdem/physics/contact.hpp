@@ -147,9 +147,6 @@ struct ContactSet {
   // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
   // at which it is tested again
   std::vector<double> pair_wake, node_drift, cb_drift;
-  // and pairs sleep on one number: drift_all is the sum over the steps (as long) of the
-  // largest |v| dt of any node (no node's path length grew by more)
-  double drift_all = 0;
   std::vector<float> pair_gwake;   // per pair: the clock of its node's group (below) before which
                                    // it is not tested again (rounded down: a float halves the
                                    // step's streaming pass)
@@ -158,8 +155,8 @@ struct ContactSet {
   // rock); per group this step's largest node speed, and, per group holding pairs' nodes, the
   // groups of those nodes and of their pairs' blocks (CSR, at the rebuild) and a clock, the sum
   // over the steps of the largest |v| dt among them (no path length of a node or a block of its
-  // pairs grew by more). Where drift_all follows the fastest fragment anywhere, a group's clock
-  // follows only the motion near it.
+  // pairs grew by more). Where one clock for all (until 4 Dec 2026) followed the fastest
+  // fragment anywhere, a group's clock follows only the motion near it.
   std::vector<double> grp_speed, grp_clock;
   std::vector<std::int32_t> grp_pair_start, grp_nbr_start, grp_nbr;
   // per candidate block, its pairs (CSR): woken when the block's tolerance reach is over the cap

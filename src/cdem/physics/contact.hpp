@@ -180,6 +180,9 @@ struct ContactSet {
   // per block pair the edge pairs (bit 6 edge of a + edge of b) the count pass found touching
   // this step: the fill pass tests only those again (sized at the rebuild)
   std::vector<std::uint64_t> bp_hits;
+  // this step: per block pair whether it is awake, and the awake ones in order (sized at the rebuild)
+  std::vector<std::uint8_t> bp_awake_flag;
+  std::vector<std::int32_t> bp_awake;
   // the distinct blocks of the block pairs (ascending; rebuilt), each pair's two indices among
   // them, and per block this step's bounding sphere (centre, radius) and geometry (each computed
   // once per step, not once per pair)

@@ -40,6 +40,7 @@
 #include <limits>
 #include <vector>
 
+#include "cdem/core/prefetch.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 #include "cdem/physics/contact.hpp"
 
@@ -305,6 +306,8 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_prev.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
   cs.bp_hits.assign(cs.bp_a.size(), 0);
+  cs.bp_awake_flag.assign(cs.bp_a.size(), 0);
+  cs.bp_awake.reserve(cs.bp_a.size());
   // room for the contacts without allocating in a step (grown only if a step needs more)
   const std::size_t room = std::max<std::size_t>(64, 2 * static_cast<std::size_t>(cs.ec_active_max));
   for_each_edge_array(cs, [&](auto&, auto& now) { now.reserve(room); });
@@ -373,11 +376,19 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     }
   };
 #pragma omp parallel for schedule(static)
-  for (std::int64_t j = 0; j < nbp; ++j)
-    if (!asleep(j)) {
+  for (std::int64_t j = 0; j < nbp; ++j) {
+    const bool awake = !asleep(j);
+    cs.bp_awake_flag[j] = awake;
+    if (awake) {
       mark(cs.bp_ia[j]);
       mark(cs.bp_ib[j]);
     }
+  }
+  // the awake block pairs in order (the count pass below runs over them alone, their blocks'
+  // geometry prefetched: 2 x 10 cache lines scattered over the blocks, most of its time)
+  cs.bp_awake.clear();  // (within its capacity)
+  for (std::int64_t j = 0; j < nbp; ++j)
+    if (cs.bp_awake_flag[j]) cs.bp_awake.push_back(static_cast<std::int32_t>(j));
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i)
     if (cs.eb_need[i] == 1) tet_geom(m, cs, cs.eb_block[i], cs.eb_geom[i]);
@@ -396,17 +407,22 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   // So the pair is not tested again before dD_a + dD_b reaches delta / 3, or delta -
   // (kContactRhoCap + 1) max(tol_a, tol_b) (one tol for rounding): no contact is missed, the
   // results are the same bit for bit. Pairs that held contacts are tested every step.
-  std::int64_t tests = 0;
-#pragma omp parallel for schedule(static) reduction(+ : tests)
-  for (std::int64_t j = 0; j < nbp; ++j) {
+  std::fill(cs.bp_count.begin(), cs.bp_count.end(), 0);  // (the asleep pairs: none)
+  const auto nawake = static_cast<std::int64_t>(cs.bp_awake.size());
+  std::int64_t tests = nawake;
+#pragma omp parallel for schedule(static)
+  for (std::int64_t w = 0; w < nawake; ++w) {
+    if (w + kPrefetchAhead < nawake) {
+      const std::int32_t ja = cs.bp_awake[w + kPrefetchAhead];
+      prefetch_object(cs.eb_geom[cs.bp_ia[ja]]);
+      prefetch_object(cs.eb_geom[cs.bp_ib[ja]]);
+      prefetch_at(static_cast<std::size_t>(cs.bp_ia[ja]), cs.eb_c.data(), cs.eb_r.data());
+      prefetch_at(static_cast<std::size_t>(cs.bp_ib[ja]), cs.eb_c.data(), cs.eb_r.data());
+    }
+    const std::int64_t j = cs.bp_awake[w];
     const std::int32_t ia = cs.bp_ia[j], ib = cs.bp_ib[j];
     const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
     const double drift_min = cs.eb_drift[2 * ia] + cs.eb_drift[2 * ib];
-    if (asleep(j)) {
-      cs.bp_count[j + 1] = 0;  // asleep
-      continue;
-    }
-    ++tests;
     const Vec3 ca = cs.eb_c[ia], cb = cs.eb_c[ib];
     const double ra = cs.eb_r[ia], rb = cs.eb_r[ib];
     const double dc2 = dot(ca - cb, ca - cb);

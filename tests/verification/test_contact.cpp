@@ -450,16 +450,25 @@ TEST(ContactDeterminism, SleepChangesNothing) {
 }
 
 // The pairs sleep on their node's group clock (contact.cpp), which must follow the pairs' blocks
-// too: body a at rest is struck by body b at 10 m/s, so a's nodes come into b's faces while every
-// node of a's groups is still. Sleep on or off: the same bits. (Built without the blocks' groups
-// in a group's list, so that the clock followed only its own nodes, this fails: a's nodes slept
-// through b's approach.)
+// too: body a (blocks 0-47, groups 0-2) drifts sideways at 0.3 m/s only and is struck by body b
+// (blocks 48-95, groups 3-5) at 10 m/s, so a's nodes come into b's faces while a's own groups move
+// 33 times slower. Sleep on (at 1, 2 and 3 threads, so that threads' ranges start inside groups)
+// or off: the same bits, with the default skin (one build) and a 2 mm skin (rebuilds, the wakes
+// kept across them while the groups' lists change). (Built with a clock that followed only its
+// own group's nodes, this fails: a's nodes slept through b's approach.)
 TEST(ContactDeterminism, SleepClockFollowsThePairsBlocks) {
-  std::array<std::int64_t, 3> slept{}, awake{};
-  const auto a = impact_run([](int) { return 2; }, true, &slept, 0.01, 0.0, 0.0, -10.0);
-  const auto b = impact_run([](int) { return 2; }, false, &awake, 0.01, 0.0, 0.0, -10.0);
-  expect_same_impact(a, b);
-  EXPECT_LT(2 * slept[0], awake[0]) << "node-block tests: " << slept[0] << " of " << awake[0];
+  for (const double skin : {0.0, 0.002}) {
+    std::array<std::int64_t, 3> slept{}, awake{};
+    const auto b = impact_run([](int) { return 2; }, false, &awake, 0.01, skin, 0.0, -10.0);
+    for (const int threads : {1, 2, 3}) {
+      const auto a = impact_run([threads](int) { return threads; }, true, &slept, 0.01, skin, 0.0, -10.0);
+      expect_same_impact(a, b);
+    }
+    EXPECT_LT(2 * slept[0], awake[0]) << "node-block tests: " << slept[0] << " of " << awake[0];
+    if (skin > 0) {
+      EXPECT_GE(slept[2], 3) << "rebuilds: " << slept[2];
+    }
+  }
 }
 
 TEST(ContactDeterminism, ImpactOneAndTwoThreads) {

@@ -409,7 +409,6 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   // results are the same bit for bit. Pairs that held contacts are tested every step.
   std::fill(cs.bp_count.begin(), cs.bp_count.end(), 0);  // (the asleep pairs: none)
   const auto nawake = static_cast<std::int64_t>(cs.bp_awake.size());
-  std::int64_t tests = nawake;
 #pragma omp parallel for schedule(static)
   for (std::int64_t w = 0; w < nawake; ++w) {
     if (w + kPrefetchAhead < nawake) {
@@ -465,7 +464,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     cs.bp_count[j + 1] = count;
     cs.bp_hits[j] = hits;
   }
-  cs.block_pair_tests += tests;
+  cs.block_pair_tests += nawake;  // (every awake block pair is tested)
   for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
   const auto nec = static_cast<std::size_t>(cs.bp_count[nbp]);
   for_each_edge_array(cs, [&](auto&, auto& now) { now.resize(nec); });

@@ -218,19 +218,6 @@ void Simulation::setup_initial_stress(const Case& c) {
   }
 }
 
-void AppliedLoads::apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t r = first + i;
-    if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
-      prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
-      prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
-    }
-    m.f[pair_b[r]] += pair_force[r];
-    m.f[pair_a[r]] -= pair_force[r];
-    power_old += power[i];
-  }
-}
-
 double AppliedLoads::power_now(const Model& m) {
   // Each load's term formed in parallel (the velocities were just written by every thread: read
   // by one serial loop they cost twice as much at 2 threads as at 1), then summed serially in the

@@ -80,7 +80,18 @@ struct AppliedLoads {
   }
   // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
   // (power[i] for load first + i): the forces and power_old summed in the record's order.
-  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power);
+  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t r = first + i;
+      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
+        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
+        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
+      }
+      m.f[pair_b[r]] += pair_force[r];
+      m.f[pair_a[r]] -= pair_force[r];
+      power_old += power[i];
+    }
+  }
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
   double power_now(const Model& m);
   std::vector<double> terms;  // power_now's per-load terms (grown once)

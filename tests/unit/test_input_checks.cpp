@@ -95,6 +95,23 @@ TEST(CaseText, RefusedBeforeToml) {
 
 // A dotted key of 100 000 parts overflowed the stack in toml11 (found while writing these
 // tests; kept in tests/fuzz/regressions/case too): refused before toml11 sees it.
+// toml11 overflows a signed integer on a binary integer of 63 digits or more (found by fuzzing:
+// tests/fuzz/regressions/case/toml11_binary_integer_overflow.toml): refused before it parses.
+TEST(CaseText, LongBinaryIntegerIsRefusedBeforeToml) {
+  const std::string ones(70, '1');
+  EXPECT_NE(case_error("a = 0b" + ones + "\n").find("line 1, column 5: a binary integer of more than 62 digits"),
+            std::string::npos);
+  EXPECT_NE(case_error("a = [1, 0b" + std::string(63, '0') + "]\n").find("binary integer of more than 62"),
+            std::string::npos);
+  EXPECT_NE(case_error(kCase, {"simulation.gravity=[0b" + ones + ", 0, 0]"}).find("binary integer"),
+            std::string::npos);
+  // 62 digits (underscores not counted), keys and strings that look alike pass the scan
+  const std::string d62 = "0b1_" + std::string(61, '0');
+  EXPECT_EQ(case_error("title = \"0b" + ones + "\"\n0b" + ones + " = 1\n" + kCase).find("binary integer"),
+            std::string::npos);
+  EXPECT_EQ(case_error("a = " + d62 + "\n").find("binary integer"), std::string::npos);
+}
+
 TEST(CaseText, HugeDottedKeyIsRefusedBeforeToml) {
   std::string dotted;
   for (int i = 0; i < 100000; ++i) dotted += i ? ".a" : "a";

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <vector>
 
 #include "cdem/core/error.hpp"
@@ -12,6 +13,8 @@
 namespace cdem {
 namespace {
 
+constexpr int kMaxBinaryDigits = 62;
+
 struct Structure {
   std::size_t offset = std::string_view::npos;  // where a limit is passed (npos: never)
   std::string what;
@@ -20,7 +23,8 @@ struct Structure {
 // The structure of TOML text, outside strings and comments: nesting of arrays and inline tables
 // (values), and the parts of each dotted key (a key before '=', a table header, a key inside an
 // inline table). toml11 recurses once per level of either, and a dotted key of 100 000 parts
-// overflows the stack. Conservative: it only has to find where a limit is passed.
+// overflows the stack. Also the length of binary integers (below). Conservative: it only has
+// to find where a limit is passed.
 Structure scan_structure(std::string_view s, int max_depth, int max_parts) {
   const std::size_t n = s.size();
   std::vector<char> open;  // '[' (array) or '{' (inline table) of the values being read
@@ -87,6 +91,20 @@ Structure scan_structure(std::string_view s, int max_depth, int max_parts) {
         key = false;
       }
       ++i;
+      continue;
+    }
+    // A binary integer: toml11 doubles a signed 64-bit place value at each digit, leading zeros
+    // included, so a 63rd digit overflows it (undefined behaviour, found by fuzzing). An integer
+    // is 64-bit anyway: more than 62 digits are refused here. (Octal and hexadecimal integers go
+    // through a stream, which reports an overflow.)
+    if (c == '0' && i + 1 < n && s[i + 1] == 'b' &&
+        (i == 0 || !(std::isalnum(static_cast<unsigned char>(s[i - 1])) || s[i - 1] == '_' || s[i - 1] == '.'))) {
+      std::size_t j = i + 2;
+      int digits = 0;
+      for (; j < n && (s[j] == '0' || s[j] == '1' || s[j] == '_'); ++j) digits += s[j] != '_';
+      if (digits > kMaxBinaryDigits)
+        return {i, fmt::format("a binary integer of more than {} digits", kMaxBinaryDigits)};
+      i = j;
       continue;
     }
     if (c == '[' || c == '{') {

@@ -135,6 +135,18 @@ check youngs_negative 2 "key 'material[0].youngs_modulus'" "expected a positive 
 check poisson_half 2 "key 'material[0].poisson_ratio'" "(-1, 0.5)" "got 0.5"
 check typo_end_tme 2 "key 'simulation.end_tme'" "unknown key" "end_time"
 check dt_safety_above_one 2 "key 'simulation.dt_safety'" "(0, 1]" "got 1.5"
+# mass scaling (simulation.mass_scaling_dt): negative, in the springs mode, with a fixed dt, a
+# limit above 0.1, and a step that needs more mass than the limit
+expect mass_scaling_negative 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set simulation.mass_scaling_dt=-1e-6 -- \
+  "key 'simulation.mass_scaling_dt'" "got -1e-06"
+expect mass_scaling_springs 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set 'simulation.interfaces="springs"' \
+  --set simulation.mass_scaling_dt=1e-6 -- "key 'simulation.mass_scaling_dt'" "tied interface mode only"
+expect mass_scaling_fixed_dt 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set simulation.dt=1e-9 \
+  --set simulation.mass_scaling_dt=1e-6 -- "key 'simulation.mass_scaling_dt'" "not both"
+expect mass_scaling_limit_large 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set simulation.mass_scaling_dt=1e-6 \
+  --set simulation.mass_scaling_limit=0.5 -- "key 'simulation.mass_scaling_limit'" "(0, 0.1]" "got 0.5"
+expect mass_scaling_too_much 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set simulation.mass_scaling_dt=1e-3 -- \
+  "key 'simulation.mass_scaling_dt'" "simulation.mass_scaling_limit = 0.0001"
 check interface_law_unknown 2 "key 'interface[0].law'" "'mohr_colomb'" "'mohr_coulomb'" "'fracture_energy'" "'elastic'"
 check friction_angle_95 2 "key 'interface[0].friction_angle'" "[0, 90)" "got 95"
 check boundary_type_unknown 2 "key 'boundary[0].type'" "'clamped'" "'fixed'" "'non_reflecting'"

@@ -10,12 +10,15 @@
 //  - the P-wave speed on tets at the default settings, against the springs mode.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "cdem/analysis/monitors.hpp"
+#include "cdem/core/error.hpp"
 #include "cdem/physics/springs.hpp"
 #include "cdem/physics/tie_failure.hpp"
 #include "cdem/physics/ties.hpp"
@@ -263,6 +266,171 @@ TEST(TiedTimeStep, StableAtTheBoundGrowsAbove) {
   EXPECT_LT(p_default, 1.1);
   EXPECT_LT(f1, 2.0);
   EXPECT_GT(f13, 1e3);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mass scaling (simulation.mass_scaling_dt, scale_masses_to_bound; docs/theory.md "Mass scaling of
+// the smallest blocks"). A perturbed Kuhn tet box (interior vertices moved by up to 0.35 of a
+// cell: some tets are far flatter than the others, as Gmsh's slivers are):
+//  - exactly the blocks whose own bound 2 / omega_e is below the target get heavier, each by
+//    s = (target omega_e / 2)^2, so that its bound becomes the target (relative 1e-12: the
+//    eigenvalue of the scaled M^-1 K is the old one over s, up to the Jacobi iteration's
+//    round-off); the others keep their masses bit for bit; the added mass is the sum of
+//    (s - 1) m over the scaled nodes (relative 1e-12, summation order);
+//  - the Simulation takes the step asked (relative 1e-12) and reports what it added;
+//  - free blocks pressed into contact (every opened point engaged, the adverse case of
+//    TiedTimeStep above) run 3000 steps at the scaled step, twice the unscaled one: the energy
+//    stays bounded (below 2 x its start, the bound TiedTimeStep uses at the stability limit),
+//    and the same model at the same step without the added mass blows up (above 1e3 x): the
+//    added mass, not luck, is what keeps it stable; linear momentum is conserved (relative
+//    1e-10 of the sum of |m v|: internal forces only, whatever the masses);
+//  - more added mass than simulation.mass_scaling_limit is refused, naming the key.
+// ---------------------------------------------------------------------------------------------
+Mesh flat_tet_box() {
+  Mesh mesh = tet_box(3, 3, 3, 1, 1, 1);
+  perturb_interior(mesh, 0.35, 1.0 / 3, 5);
+  return mesh;
+}
+
+std::vector<double> block_bounds(const Model& m) {
+  std::vector<double> d(m.n_blocks());
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) d[b] = 2.0 / std::sqrt(block_omega2(m, b));
+  return d;
+}
+
+TEST(MassScaling, OnlyTheBlocksBelowTheBoundGetMass) {
+  const Model m0 = make_model(flat_tet_box(), rock(), interface_of(InterfaceLaw::MohrCoulomb));
+  const std::vector<double> d0 = block_bounds(m0);
+  const double dmin = *std::min_element(d0.begin(), d0.end());
+  const double target = 1.6 * dmin;
+  Model m = m0;
+  const MassScaling ms = scale_masses_to_bound(m, target);
+  const std::vector<double> d1 = block_bounds(m);
+  std::int64_t below = 0;
+  double added = 0, total = 0;
+  for (double mn : m0.mass) total += mn;
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    const auto n0 = m.block_first_node[b], n1 = m.block_first_node[b + 1];
+    if (d0[b] < target) {
+      ++below;
+      EXPECT_NEAR(d1[b] / target, 1.0, 1e-12) << "block " << b;
+      const double s = (target / d0[b]) * (target / d0[b]);
+      for (auto n = n0; n < n1; ++n) {
+        EXPECT_NEAR(m.mass[n] / (s * m0.mass[n]), 1.0, 1e-12);
+        added += (s - 1.0) * m0.mass[n];
+      }
+    } else {
+      for (auto n = n0; n < n1; ++n) EXPECT_EQ(m.mass[n], m0.mass[n]) << "block " << b;
+    }
+  }
+  std::printf("[mass scaling] %zu blocks, bounds %.4g to %.4g s; target 1.6 x the smallest: %lld "
+              "blocks scaled (up to %.3g x), %.4g kg added to %.4g kg\n",
+              m.n_blocks(), dmin, *std::max_element(d0.begin(), d0.end()),
+              static_cast<long long>(ms.blocks), ms.max_factor, ms.added, ms.total);
+  EXPECT_GT(below, 0);
+  EXPECT_LT(below, static_cast<std::int64_t>(m.n_blocks()) / 2);  // selective, not the whole box
+  EXPECT_EQ(ms.blocks, below);
+  EXPECT_NEAR(ms.added / added, 1.0, 1e-12);
+  EXPECT_NEAR(ms.total / total, 1.0, 1e-12);
+  EXPECT_NEAR(ms.max_factor, (target / dmin) * (target / dmin), 1e-9);
+}
+
+// Energy max / start over 3000 steps of free pressed blocks (as energy_growth), the momentum drift
+// relative to sum |m v|; `mass_dt` > 0: simulation.mass_scaling_dt; safety as dt_safety (set in
+// code, above 1 allowed).
+struct FreeRun {
+  double growth = 0, momentum = 0, dt = 0;
+  MassScaling ms;
+};
+FreeRun free_pressed_run(const Mesh& mesh, double safety, double mass_dt) {
+  const auto mat = rock();
+  auto glue = interface_of(InterfaceLaw::MohrCoulomb);
+  glue.precracked = true;
+  Model model = make_model(mesh, mat, glue);
+  std::mt19937 gen(1);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (auto& w : model.v) w = 1e-3 * Vec3{u(gen), u(gen), u(gen)};
+  for (std::size_t b = 0; b < model.n_blocks(); ++b) {
+    Vec3 cen{};
+    const auto n0 = model.block_first_node[b], n1 = model.block_first_node[b + 1];
+    for (auto n = n0; n < n1; ++n) cen += model.X(n);
+    cen = cen / (n1 - n0);
+    for (auto n = n0; n < n1; ++n) model.x[n] = cen + (1 + 1e-5) * (model.X(n) - cen);
+  }
+  Case c = tied_case(mat, glue, safety);
+  c.mass_scaling_dt = mass_dt;
+  c.mass_scaling_limit = 1.0;  // (in code: this box is far flatter than a real mesh, 12 % is added)
+  Simulation sim(std::move(model), c);
+  FreeRun r;
+  r.dt = sim.dt();
+  r.ms = sim.mass_scaling();
+  auto momentum = [&](double* scale) {
+    Vec3 p{};
+    double a = 0;
+    for (std::size_t n = 0; n < sim.model().n_nodes(); ++n) {
+      p += sim.model().mass[n] * sim.model().v[n];
+      a += sim.model().mass[n] * norm(sim.model().v[n]);
+    }
+    if (scale) *scale = a;
+    return p;
+  };
+  double scale = 0;
+  const Vec3 p0 = momentum(&scale);
+  sim.step(true);
+  const double e0 = sim.energy().mechanical();
+  double emax = e0;
+  for (int k = 0; k < 3000; ++k) {
+    sim.step(k % 10 == 0);
+    if (k % 10 == 0) {
+      const double e = sim.energy().mechanical();
+      if (!std::isfinite(e)) {
+        r.growth = INFINITY;
+        return r;
+      }
+      emax = std::max(emax, e);
+    }
+  }
+  r.growth = emax / e0;
+  r.momentum = norm(momentum(nullptr) - p0) / scale;
+  return r;
+}
+
+TEST(MassScaling, TwiceTheStepStaysStableWithTheMassOnly) {
+  const Mesh mesh = flat_tet_box();
+  const double safety = 1.0 / std::sqrt(2.0);  // dt = 2 / (omega_max sqrt(1 + eta)) x this
+  const FreeRun plain = free_pressed_run(mesh, safety, 0.0);
+  const FreeRun scaled = free_pressed_run(mesh, safety, 2.0 * plain.dt);
+  const FreeRun unscaled_at_2dt = free_pressed_run(mesh, 2.0 * safety, 0.0);
+  std::printf("[mass scaling] free pressed tets: dt %.4g s, energy max / start %.4f; with mass "
+              "scaling to %.4g s (%lld blocks, up to %.3g x, +%.3g of the mass) %.4f, momentum "
+              "drift %.2e; at %.4g s without it %.3g\n",
+              plain.dt, plain.growth, scaled.dt, static_cast<long long>(scaled.ms.blocks),
+              scaled.ms.max_factor, scaled.ms.share(), scaled.growth, scaled.momentum,
+              unscaled_at_2dt.dt, unscaled_at_2dt.growth);
+  EXPECT_NEAR(scaled.dt / (2.0 * plain.dt), 1.0, 1e-12);
+  EXPECT_NEAR(unscaled_at_2dt.dt / (2.0 * plain.dt), 1.0, 1e-12);
+  EXPECT_GT(scaled.ms.blocks, 0);
+  EXPECT_LT(plain.growth, 2.0);
+  EXPECT_LT(scaled.growth, 2.0);
+  EXPECT_LT(scaled.momentum, 1e-10);
+  EXPECT_GT(unscaled_at_2dt.growth, 1e3);
+}
+
+TEST(MassScaling, MoreThanTheLimitIsRefused) {
+  const auto mat = rock();
+  const auto glue = interface_of(InterfaceLaw::MohrCoulomb);
+  Case c = tied_case(mat, glue);
+  const double dt0 = Simulation(make_model(flat_tet_box(), mat, glue), c).dt();
+  c.mass_scaling_dt = 3.0 * dt0;
+  c.mass_scaling_limit = 1e-6;
+  try {
+    Simulation sim(make_model(flat_tet_box(), mat, glue), c);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("simulation.mass_scaling_dt"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("simulation.mass_scaling_limit"), std::string::npos) << msg;
+  }
 }
 
 // ---------------------------------------------------------------------------------------------

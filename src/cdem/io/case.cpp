@@ -146,7 +146,7 @@ Case parse_case(std::string_view text, const std::string& path,
   if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
                     "history_interval", "release_distance_factor", "energy_blowup_factor",
-                    "max_steps", "gravity", "interfaces", "opened_stiffness",
+                    "max_steps", "gravity", "interfaces", "opened_stiffness", "mass_scaling_dt", "mass_scaling_limit",
                     "allow_large_run", "checkpoint_interval", "checkpoint_wall_interval"});
   c.end_time = sim->positive("end_time");
   c.dt_safety = sim->positive("dt_safety", 0.5);
@@ -184,6 +184,19 @@ Case parse_case(std::string_view text, const std::string& path,
     throw InputError(fmt::format("{}: expected a value in (0, 4], got {} (the opened points' share "
                                  "of the blocks' stability limit; dt shrinks by 1 / sqrt(1 + it))",
                                  sim->where("opened_stiffness"), c.opened_stiffness));
+  c.mass_scaling_dt = sim->non_negative("mass_scaling_dt", 0.0);
+  c.mass_scaling_limit = sim->positive("mass_scaling_limit", 1e-4);
+  if (c.mass_scaling_limit > 0.1)
+    throw InputError(fmt::format("{}: expected a share of the model's mass in (0, 0.1], got {} (more "
+                                 "added mass than that changes the blast's dynamics)",
+                                 sim->where("mass_scaling_limit"), c.mass_scaling_limit));
+  if (c.mass_scaling_dt > 0 && c.interface_mode != InterfaceMode::Tied)
+    throw InputError(fmt::format("{}: mass scaling is available in the tied interface mode only "
+                                 "(simulation.interfaces = \"tied\", the default)",
+                                 sim->where("mass_scaling_dt")));
+  if (c.mass_scaling_dt > 0 && c.fixed_dt > 0)
+    throw InputError(fmt::format("{}: set either simulation.dt or simulation.mass_scaling_dt, not both",
+                                 sim->where("mass_scaling_dt")));
   c.allow_large_run = sim->boolean("allow_large_run", false);
   c.checkpoint_interval = sim->non_negative("checkpoint_interval", 0.0);
   c.checkpoint_wall_interval = sim->non_negative("checkpoint_wall_interval", 600.0);

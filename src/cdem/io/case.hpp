@@ -108,6 +108,9 @@ struct Case {
   std::int64_t max_steps = 0;           // 0: unlimited
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
   double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2
+  double mass_scaling_dt = 0;           // tied: > 0, blocks whose own stable step is below this step
+                                        // get mass up to it (solver/time_step.hpp; 0: none, the paper's form)
+  double mass_scaling_limit = 1e-4;     // the most mass that may be added, as a share of the model's
   bool allow_large_run = false;         // lifts the caps on steps, outputs, samples (run_limits.hpp)
   double checkpoint_interval = 0;       // s of simulated time between checkpoints (0: none)
   double checkpoint_wall_interval = 600;  // s of wall time between checkpoints (0: none)

@@ -64,6 +64,10 @@ std::string resolved_case_toml(const Case& c) {
                    c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
                    c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness,
                    c.allow_large_run, c.checkpoint_interval, c.checkpoint_wall_interval);
+  // (only when set: checkpoints of cases resolved before the key existed still match)
+  if (c.mass_scaling_dt > 0)
+    o += fmt::format("mass_scaling_dt = {:.17g}\nmass_scaling_limit = {:.17g}\n", c.mass_scaling_dt,
+                     c.mass_scaling_limit);
   o += "output_times = [";
   for (std::size_t i = 0; i < c.output_times.size(); ++i)
     o += fmt::format("{}{:.17g}", i ? ", " : "", c.output_times[i]);

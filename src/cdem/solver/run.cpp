@@ -392,6 +392,8 @@ RunResult run_case(const Case& c, const RunOptions& options) {
                  "by the {} (blocks {:.4g} s, springs {:.4g} s, safety {}); {} threads",
                  c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), m.tied ? "tied" : "spring",
                  sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety, threads);
+  if (!opt.quiet && c.mass_scaling_dt > 0)
+    spdlog::info("mass: {}", describe_mass_scaling(sim.mass_scaling()));
 
   // The run loop's own state (saved in checkpoints with the objects it steps).
   std::string run_id = new_run_id();
@@ -647,6 +649,10 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       {"untied_points", std::to_string(m.tied ? static_cast<long long>(std::count(m.sp_tied.begin(), m.sp_tied.end(), 0)) : 0LL)},
       {"opened_stiffness_ratio_min", json_number(sim.opened_stiffness().ratio_min)},
       {"opened_stiffness_ratio_median", json_number(sim.opened_stiffness().ratio_median)},
+      {"mass_scaling_blocks", std::to_string(sim.mass_scaling().blocks)},
+      {"mass_scaling_added_kg", json_number(sim.mass_scaling().added)},
+      {"mass_scaling_added_share", json_number(sim.mass_scaling().share())},
+      {"mass_scaling_max_factor", json_number(sim.mass_scaling().max_factor)},
       {"insertion_energy", json_number(last.insertion)},
       {"contact", json_string(sim.contact().enabled ? "on" : "off")},
       {"contact_pairs_max", std::to_string(sim.contact().active_max)},

@@ -41,6 +41,20 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   }
   if (c.interface_mode == InterfaceMode::Tied) {
     build_ties(m_);
+    if (c.mass_scaling_dt > 0) {
+      // the element bound whose step (x safety / sqrt(1 + eta), as below) is the one asked
+      const double bound = c.mass_scaling_dt * std::sqrt(1.0 + c.opened_stiffness) / c.dt_safety;
+      mass_scaling_ = scale_masses_to_bound(m_, bound);
+      if (mass_scaling_.share() > c.mass_scaling_limit)
+        throw InputError(fmt::format(
+            "{}: key 'simulation.mass_scaling_dt': a step of {:g} s needs {:.4g} kg more mass on {} "
+            "blocks (up to {:.3g} times their own), {:.3g} of the model's {:.6g} kg: above "
+            "simulation.mass_scaling_limit = {:g}. Ask a smaller step, raise the limit, or mesh "
+            "with fewer small or flat elements",
+            c.path, c.mass_scaling_dt, mass_scaling_.added, mass_scaling_.blocks,
+            mass_scaling_.max_factor, mass_scaling_.share(), mass_scaling_.total,
+            c.mass_scaling_limit));
+    }
     stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
     opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_);
     const std::size_t nv = m_.n_vertices();

@@ -140,6 +140,8 @@ class Simulation {
   // the springs mode's E / h (min, median).
   double omega2_max() const { return omega2_max_; }
   const OpenedStiffness& opened_stiffness() const { return opened_; }
+  // tied mode: what simulation.mass_scaling_dt added (blocks 0: none; solver/time_step.hpp)
+  const MassScaling& mass_scaling() const { return mass_scaling_; }
   const ContactSet& contact() const { return contact_; }
 
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
@@ -203,6 +205,7 @@ class Simulation {
   std::vector<std::uint8_t> tie_flag_;
   double w_insert_ = 0, omega2_max_ = 0;
   OpenedStiffness opened_;
+  MassScaling mass_scaling_;
   ContactSet contact_;
   double w_boundary_ = 0, w_absorbed_ = 0, w_explosive_ = 0, e_initial_ = 0;
   // The parts after t_n of the last step's works, F(n) . v(n+1/2) dt / 2 (energy())

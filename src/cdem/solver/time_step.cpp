@@ -5,6 +5,8 @@
 #include <limits>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "cdem/core/sym_eigen.hpp"
 
 namespace cdem {
@@ -109,6 +111,37 @@ double block_omega2(const Model& m, std::size_t b) {
     for (int j = 0; j < ndof; ++j)
       K[i][j] /= std::sqrt(m.mass[n0 + i / dim] * m.mass[n0 + j / dim]);
   return sym_max_eigenvalue(K, ndof);
+}
+
+MassScaling scale_masses_to_bound(Model& m, double bound) {
+  MassScaling ms;
+  ms.bound = bound;
+  for (double mn : m.mass) ms.total += mn;
+  if (!(bound > 0)) return ms;
+  // omega_e^2 > (2 / bound)^2: the block's bound is below the one asked
+  const double w2_max = 4.0 / (bound * bound);
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    if (!m.block_materials[m.block_material[b]].explosive.empty()) continue;
+    const double o2 = block_omega2(m, b);
+    if (!(o2 > w2_max)) continue;
+    const double s = o2 / w2_max;
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+      ms.added += (s - 1.0) * m.mass[n];
+      m.mass[n] *= s;
+      if (!m.inv_mass.empty()) m.inv_mass[n] = 1.0 / m.mass[n];
+    }
+    ++ms.blocks;
+    ms.max_factor = std::max(ms.max_factor, s);
+  }
+  return ms;
+}
+
+std::string describe_mass_scaling(const MassScaling& ms) {
+  if (ms.blocks == 0)
+    return fmt::format("scaled to the element bound {:.4g} s: no block is below it, nothing added", ms.bound);
+  return fmt::format("scaled to the element bound {:.4g} s: {} blocks made up to {:.3g} times heavier, "
+                     "{:.4g} kg added to the model's {:.6g} kg ({:.3g} of it)",
+                     ms.bound, ms.blocks, ms.max_factor, ms.added, ms.total, ms.share());
 }
 
 StableStep stable_time_step_tied(const Model& m, double safety, double eta, double* omega2_max) {

@@ -3,6 +3,7 @@
 // h_e is the block's smallest altitude; the spring limit uses the normal stiffnesses of the
 // spring points attached to node i. The limiting part is reported.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "cdem/model/model.hpp"
@@ -38,5 +39,24 @@ double block_omega2(const Model& m, std::size_t b);
 //   dt = safety * 2 / (omega_max sqrt(1 + eta))      (dt_spring reports 2 / (omega_max sqrt(eta))).
 // `omega2_max` returns omega_max^2.
 StableStep stable_time_step_tied(const Model& m, double safety, double eta, double* omega2_max);
+
+// Mass scaling of the few blocks that would set the step (tied mode; docs/theory.md "Mass scaling
+// of the smallest blocks"). A Gmsh tet mesh holds a few slivers whose own highest frequency is
+// several times that of the well-shaped tets of the same size; the step follows them. Each rock
+// block whose free-element bound 2 / omega_e is below `bound` gets its nodes' masses multiplied by
+// s = (bound omega_e / 2)^2, so that its bound is `bound` (omega_e^2 scales as 1 / s); the other
+// blocks are untouched. The element eigenvalue theorem then bounds the whole model by `bound`.
+// Explosive blocks are skipped as in stable_time_step_tied. Returns what was added.
+struct MassScaling {
+  double bound = 0;          // the element bound asked (s), 0: no scaling
+  std::int64_t blocks = 0;   // blocks made heavier
+  double added = 0;          // kg (per unit thickness in 2D) added
+  double total = 0;          // the model's mass before (same unit)
+  double max_factor = 1;     // the largest s
+  double share() const { return total > 0 ? added / total : 0.0; }
+};
+MassScaling scale_masses_to_bound(Model& m, double bound);
+// One line for check and the run's log: how many blocks, how much mass, the largest factor.
+std::string describe_mass_scaling(const MassScaling& ms);
 
 }  // namespace cdem

@@ -88,7 +88,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets, int
     fmt::print("dt          {:.4g} s, limited by the {} (element eigenvalue bound 2/omega_max "
                "{:.4g} s, x 1/sqrt(1 + {}) for opened points, safety {})\n",
                sim.dt(), st.limit, st.dt_block, c.opened_stiffness, c.dt_safety);
-    if (c.mass_scaling_dt > 0) fmt::print("mass        {}\n", cdem::describe_mass_scaling(sim.mass_scaling()));
+    if (c.mass_scaling_dt > 0) fmt::print("mass        {}\n", cdem::describe_mass_scaling(sim.mass_scaling(), c.mass_scaling_dt, m.dim));
   } else {
     fmt::print("interfaces  springs (SPEC 1.3): every interface a spring from t = 0\n");
     fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",

@@ -240,6 +240,10 @@ PreparedCase prepare_case(const Case& c, const Mesh& mesh, SetupTimes* times) {
   lap(&SetupTimes::simulation);
   if (!bars.empty()) sim.limit_dt(bar_dt, "blocks holding bar charges");
   if (!solids.empty()) sim.limit_dt(solids.dt_limit, "explosive blocks");
+  if (c.mass_scaling_dt > 0 && sim.dt() < c.mass_scaling_dt * (1 - 1e-9) && sim.mass_scaling().blocks > 0)
+    spdlog::warn("{}: key 'simulation.mass_scaling_dt': the run steps at {:.4g} s, below the {:.4g} s "
+                 "asked: the {} limit it further (the mass was added all the same)",
+                 c.path, sim.dt(), c.mass_scaling_dt, sim.stable().limit);
   const std::string dt_source =
       c.fixed_dt > 0 ? "key 'simulation.dt'"
                      : fmt::format("the stable step, limited by the {}", sim.stable().limit);
@@ -393,7 +397,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
                  c.title, m.n_blocks(), m.n_nodes(), m.n_springs(), m.tied ? "tied" : "spring",
                  sim.dt(), st.limit, st.dt_block, st.dt_spring, c.dt_safety, threads);
   if (!opt.quiet && c.mass_scaling_dt > 0)
-    spdlog::info("mass: {}", describe_mass_scaling(sim.mass_scaling()));
+    spdlog::info("mass: {}", describe_mass_scaling(sim.mass_scaling(), c.mass_scaling_dt, m.dim));
 
   // The run loop's own state (saved in checkpoints with the objects it steps).
   std::string run_id = new_run_id();

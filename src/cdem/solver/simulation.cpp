@@ -40,10 +40,14 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     if (zero) std::vector<Sym6>().swap(m_.stress0);
   }
   if (c.interface_mode == InterfaceMode::Tied) {
-    build_ties(m_);
+    // (before the ties: build_ties averages the clusters' initial velocities with the masses)
     if (c.mass_scaling_dt > 0) {
       // the element bound whose step (x safety / sqrt(1 + eta), as below) is the one asked
       const double bound = c.mass_scaling_dt * std::sqrt(1.0 + c.opened_stiffness) / c.dt_safety;
+      if (!std::isfinite(bound) || !(4.0 / (bound * bound) > 0))
+        throw InputError(fmt::format("{}: key 'simulation.mass_scaling_dt': {:g} s is not a time step "
+                                     "(expected at most about the run's length)",
+                                     c.path, c.mass_scaling_dt));
       mass_scaling_ = scale_masses_to_bound(m_, bound);
       if (mass_scaling_.share() > c.mass_scaling_limit)
         throw InputError(fmt::format(
@@ -55,6 +59,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
             mass_scaling_.max_factor, mass_scaling_.share(), mass_scaling_.total,
             c.mass_scaling_limit));
     }
+    build_ties(m_);
     stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
     opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_);
     const std::size_t nv = m_.n_vertices();

@@ -121,7 +121,10 @@ MassScaling scale_masses_to_bound(Model& m, double bound) {
   // omega_e^2 > (2 / bound)^2: the block's bound is below the one asked
   const double w2_max = 4.0 / (bound * bound);
   for (std::size_t b = 0; b < m.n_blocks(); ++b) {
-    if (!m.block_materials[m.block_material[b]].explosive.empty()) continue;
+    // (explosive blocks: limited by their EOS; blocks holding a bar's charge: their mass holds the
+    // products' share, products_mass, which scaling would misstate)
+    const BlockMaterial& mat = m.block_materials[m.block_material[b]];
+    if (!mat.explosive.empty() || mat.charge_fraction > 0) continue;
     const double o2 = block_omega2(m, b);
     if (!(o2 > w2_max)) continue;
     const double s = o2 / w2_max;
@@ -136,12 +139,15 @@ MassScaling scale_masses_to_bound(Model& m, double bound) {
   return ms;
 }
 
-std::string describe_mass_scaling(const MassScaling& ms) {
+std::string describe_mass_scaling(const MassScaling& ms, double dt_asked, int dim) {
+  const char* unit = dim == 2 ? "kg/m" : "kg";
   if (ms.blocks == 0)
-    return fmt::format("scaled to the element bound {:.4g} s: no block is below it, nothing added", ms.bound);
-  return fmt::format("scaled to the element bound {:.4g} s: {} blocks made up to {:.3g} times heavier, "
-                     "{:.4g} kg added to the model's {:.6g} kg ({:.3g} of it)",
-                     ms.bound, ms.blocks, ms.max_factor, ms.added, ms.total, ms.share());
+    return fmt::format("to a step of {:.4g} s (element bound {:.4g} s): no block is below it, nothing added",
+                       dt_asked, ms.bound);
+  return fmt::format("to a step of {:.4g} s (element bound {:.4g} s): {} blocks made up to {:.3g} times "
+                     "heavier, {:.4g} {} added to the model's {:.6g} {} ({:.3g} of it)",
+                     dt_asked, ms.bound, ms.blocks, ms.max_factor, ms.added, unit, ms.total, unit,
+                     ms.share());
 }
 
 StableStep stable_time_step_tied(const Model& m, double safety, double eta, double* omega2_max) {

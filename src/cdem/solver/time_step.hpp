@@ -46,7 +46,7 @@ StableStep stable_time_step_tied(const Model& m, double safety, double eta, doub
 // block whose free-element bound 2 / omega_e is below `bound` gets its nodes' masses multiplied by
 // s = (bound omega_e / 2)^2, so that its bound is `bound` (omega_e^2 scales as 1 / s); the other
 // blocks are untouched. The element eigenvalue theorem then bounds the whole model by `bound`.
-// Explosive blocks are skipped as in stable_time_step_tied. Returns what was added.
+// Explosive blocks and blocks holding a bar's charge are skipped. Returns what was added.
 struct MassScaling {
   double bound = 0;          // the element bound asked (s), 0: no scaling
   std::int64_t blocks = 0;   // blocks made heavier
@@ -57,6 +57,6 @@ struct MassScaling {
 };
 MassScaling scale_masses_to_bound(Model& m, double bound);
 // One line for check and the run's log: how many blocks, how much mass, the largest factor.
-std::string describe_mass_scaling(const MassScaling& ms);
+std::string describe_mass_scaling(const MassScaling& ms, double dt_asked, int dim);
 
 }  // namespace cdem

@@ -89,6 +89,12 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets, int
                "{:.4g} s, x 1/sqrt(1 + {}) for opened points, safety {})\n",
                sim.dt(), st.limit, st.dt_block, c.opened_stiffness, c.dt_safety);
     if (c.mass_scaling_dt > 0) fmt::print("mass        {}\n", cdem::describe_mass_scaling(sim.mass_scaling(), c.mass_scaling_dt, m.dim));
+    // (the blocks' own bounds, after any mass scaling: the few smallest are what sets dt; a step
+    // for simulation.mass_scaling_dt is bound x safety / sqrt(1 + eta))
+    const auto bq = cdem::block_bound_quantiles(m);
+    fmt::print("block bounds 2/omega_e: smallest {:.3g} s; 0.1 % of the blocks below {:.3g} s, 1 % below "
+               "{:.3g} s, 10 % below {:.3g} s\n",
+               bq.min, bq.q001, bq.q01, bq.q1);
   } else {
     fmt::print("interfaces  springs (SPEC 1.3): every interface a spring from t = 0\n");
     fmt::print("dt          {:.4g} s, limited by the {} (blocks {:.4g} s, springs {:.4g} s, safety {})\n",

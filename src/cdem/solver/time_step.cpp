@@ -139,6 +139,25 @@ MassScaling scale_masses_to_bound(Model& m, double bound) {
   return ms;
 }
 
+BoundQuantiles block_bound_quantiles(const Model& m) {
+  std::vector<double> d;
+  d.reserve(m.n_blocks());
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    if (!m.block_materials[m.block_material[b]].explosive.empty()) continue;
+    const double o2 = block_omega2(m, b);
+    if (o2 > 0) d.push_back(2.0 / std::sqrt(o2));
+  }
+  BoundQuantiles q;
+  if (d.empty()) return q;
+  std::sort(d.begin(), d.end());
+  auto at = [&](double f) { return d[std::min(d.size() - 1, static_cast<std::size_t>(f * static_cast<double>(d.size())))]; };
+  q.min = d.front();
+  q.q001 = at(0.001);
+  q.q01 = at(0.01);
+  q.q1 = at(0.1);
+  return q;
+}
+
 std::string describe_mass_scaling(const MassScaling& ms, double dt_asked, int dim) {
   const char* unit = dim == 2 ? "kg/m" : "kg";
   if (ms.blocks == 0)

@@ -56,6 +56,13 @@ struct MassScaling {
   double share() const { return total > 0 ? added / total : 0.0; }
 };
 MassScaling scale_masses_to_bound(Model& m, double bound);
+// The free-element bounds 2 / omega_e of the rock blocks (those stable_time_step_tied takes):
+// the smallest and the 0.1 %, 1 % and 10 % quantiles, for check (choosing mass_scaling_dt).
+struct BoundQuantiles {
+  double min = 0, q001 = 0, q01 = 0, q1 = 0;
+};
+BoundQuantiles block_bound_quantiles(const Model& m);
+
 // One line for check and the run's log: how many blocks, how much mass, the largest factor.
 std::string describe_mass_scaling(const MassScaling& ms, double dt_asked, int dim);
 

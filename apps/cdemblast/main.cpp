@@ -104,9 +104,14 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets, int
     const auto& ct = sim.contact();
     double kmin = 1e300, kmax = 0;
     for (double k : ct.kc) kmin = std::min(kmin, k), kmax = std::max(kmax, k);
-    fmt::print("contact     on: node against {}{}, skin {:.3g} m, penalty {:.3g} to {:.3g} N/m, "
+    double smin = 1e300, smax = 0;
+    for (double s : ct.half_skin) smin = std::min(smin, 2 * s), smax = std::max(smax, 2 * s);
+    const std::string skin =
+        c.contact.skin > 0 ? fmt::format("skin {:.3g} m", ct.skin)
+                           : fmt::format("skin a quarter of each block's size ({:.3g} to {:.3g} m)", smin, smax);
+    fmt::print("contact     on: node against {}{}, {}, penalty {:.3g} to {:.3g} N/m, "
                "friction {}, damping ratio {}\n",
-               m.dim == 3 ? "triangle" : "edge", ct.edges ? ", edge against edge" : "", ct.skin,
+               m.dim == 3 ? "triangle" : "edge", ct.edges ? ", edge against edge" : "", skin,
                kmin, kmax,
                c.contact.friction >= 0 ? fmt::format("{}", c.contact.friction)
                                        : std::string("from the interface materials"),

@@ -6,7 +6,9 @@
 #include <array>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
+#include <utility>
 #include <omp.h>
 
 #include <cmath>
@@ -301,6 +303,79 @@ TEST(ContactFast, RebuildTrigger) {
   contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 3) << "not rebuilt once the nodes could have moved 0.1 skin";
   EXPECT_EQ(cs.release_drift, 0.0);
+}
+
+// Each block's own skin (the default, skin = 0): a graded pair of bodies, a coarse 1 m cube of
+// 0.5 m tetrahedra and a fine 0.2 m cube of 0.05 m ones 1 cm beside it.
+// - Every block's half skin is 0.125 x its size (its box's largest extent).
+// - The grid search is exact: the pairs listed are those of a list built with one skin larger
+//   than any (a superset), kept where the node lies within sigma_n + sigma_b of the block's box
+//   (the same test written out here, pair by pair).
+// - The trigger is per node: a node of the fine body rebuilds after moving past its own sigma_n;
+//   a node of the coarse body moved as far does not, and does past its larger sigma_n; a node of
+//   a candidate block that is on none of its candidate faces rebuilds past its block's sigma.
+TEST(ContactFast, EachBlocksOwnSkin) {
+  const auto mat = rock();
+  const auto glue = interface_of(InterfaceLaw::Elastic);
+  Mesh mesh = merge(tet_box(2, 2, 2, 1, 1, 1), tet_box(4, 4, 4, 0.2, 0.2, 0.2, {1.01, 0.4, 0.4}), "_f");
+  mesh.region_names = {"rock"};  // (one region: two bodies, no vertex shared)
+  for (auto& r : mesh.elem_region) r = 0;
+  Model m = make_model(mesh, mat, glue);
+  ContactSettings cfg;
+  cfg.enabled = true;
+  ContactSet cs = setup_contact(m, cfg, 1.0, 1e10);
+  ASSERT_EQ(cs.half_skin.size(), m.n_blocks());
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) EXPECT_EQ(cs.half_skin[b], 0.125 * block_extent(m, b));
+  contact_forces(m, cs, 1e-6);
+  ASSERT_EQ(cs.rebuilds, 1);
+  ContactSettings wide = cfg;
+  wide.skin = 1.0;  // (more than twice the largest half skin: every pair above is in its list)
+  ContactSet cw = setup_contact(m, wide, 1.0, 1e10);
+  contact_forces(m, cw, 1e-6);
+  std::vector<std::pair<std::int32_t, std::int32_t>> expect, got;
+  for (std::size_t p = 0; p < cw.pair_node.size(); ++p) {
+    const std::int32_t n = cw.pair_node[p], b = cw.pair_block[p];
+    const double g = cs.half_skin[b] + cs.half_skin[m.node_block(static_cast<std::size_t>(n))];
+    Vec3 lo = m.x[m.block_first_node[b]], hi = lo;
+    for (auto q = m.block_first_node[b]; q < m.block_first_node[b + 1]; ++q)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.x[q][d]), hi[d] = std::max(hi[d], m.x[q][d]);
+    bool in = true;
+    for (int d = 0; d < 3; ++d) in = in && m.x[n][d] >= lo[d] - g && m.x[n][d] <= hi[d] + g;
+    if (in) expect.emplace_back(n, b);
+  }
+  for (std::size_t p = 0; p < cs.pair_node.size(); ++p) got.emplace_back(cs.pair_node[p], cs.pair_block[p]);
+  EXPECT_EQ(got, expect);
+  EXPECT_GT(got.size(), 0u);
+  EXPECT_LT(got.size(), cw.pair_node.size());
+  std::printf("[contact skin] half skins %.4g to %.4g m: %zu pairs, %zu with one skin of 1 m\n",
+              *std::min_element(cs.half_skin.begin(), cs.half_skin.end()),
+              *std::max_element(cs.half_skin.begin(), cs.half_skin.end()), got.size(), cw.pair_node.size());
+  // The trigger: a candidate node of each body.
+  std::int32_t fine = -1, coarse = -1;
+  for (auto n : cs.cand_nodes)  // (the blocks may be renumbered: told apart by their size)
+    (cs.half_skin[m.node_block(static_cast<std::size_t>(n))] > 0.03 ? coarse : fine) = n;
+  ASSERT_GE(fine, 0);
+  ASSERT_GE(coarse, 0);
+  auto sigma = [&](std::int32_t n) { return cs.half_skin[m.node_block(static_cast<std::size_t>(n))]; };
+  ASSERT_LT(2 * sigma(fine), sigma(coarse));
+  // moves node n by `times` the half skin of node `of`'s block along axis d, then one step's
+  // trigger: the rebuilds so far
+  auto move = [&](std::int32_t n, double times, std::int32_t of, int d) {
+    m.x[n][d] += times * sigma(of);
+    contact_forces(m, cs, 1e-6);
+    return cs.rebuilds;
+  };
+  EXPECT_EQ(move(coarse, 1.01, fine, 2), 1) << "a coarse node rebuilt on the fine body's skin";
+  EXPECT_EQ(move(fine, 0.99, fine, 2), 1);
+  EXPECT_EQ(move(fine, 0.02, fine, 2), 2) << "a fine node moved past its own half skin, not rebuilt";
+  EXPECT_EQ(move(coarse, 0.99, coarse, 2), 2);  // (from where it was at the second build)
+  EXPECT_EQ(move(coarse, 0.02, coarse, 2), 3) << "a coarse node moved past its own half skin, not rebuilt";
+  // A node of a candidate block off its candidate faces (the block stretches): watched too.
+  ASSERT_FALSE(cs.watch_nodes.empty());
+  const std::int32_t w = cs.watch_nodes.front();
+  EXPECT_FALSE(std::binary_search(cs.cand_nodes.begin(), cs.cand_nodes.end(), w));
+  EXPECT_EQ(move(w, 0.99, w, 1), 3);
+  EXPECT_EQ(move(w, 0.02, w, 1), 4) << "a candidate block's other node moved past its half skin, not rebuilt";
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -46,7 +46,7 @@ constexpr double kOffFace = 0.5;
 
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
-  // Rebuild when a candidate node has moved more than skin / 2, or when points were released
+  // Rebuild when a candidate node has moved more than half its skin, or when points were released
   // (their faces become candidates) once the nodes may have moved towards each other by
   // kReleaseDrift x skin since the release: at most 2 max|v| dt per step. Until then no node
   // can have come nearer a released face than that, so a contact found late overlaps it by at
@@ -79,19 +79,24 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       vmax = std::max(vmax, vg);
     }
   }
-  bool due = first_build;
+  bool due = first_build || cs.rebuild_due;
   if (release_pending) {
     cs.release_drift += 2.0 * vmax * dt;
     due = cs.release_drift > kReleaseDrift * cs.skin;
   }
   if (!due) {
     const auto nc = static_cast<std::int64_t>(cs.cand_nodes.size());
-    const double lim2 = 0.25 * cs.skin * cs.skin;
     int moved = 0;
 #pragma omp parallel for schedule(static) reduction(| : moved)
     for (std::int64_t j = 0; j < nc; ++j) {
       const Vec3 d = m.x[cs.cand_nodes[j]] - cs.x_build[j];
-      moved |= dot(d, d) > lim2;
+      moved |= dot(d, d) > cs.cand_lim2[j];
+    }
+    const auto nw = static_cast<std::int64_t>(cs.watch_nodes.size());
+#pragma omp parallel for schedule(static) reduction(| : moved)
+    for (std::int64_t j = 0; j < nw; ++j) {
+      const Vec3 d = m.x[cs.watch_nodes[j]] - cs.watch_x[j];
+      moved |= dot(d, d) > cs.watch_lim2[j];
     }
     due = moved != 0;
   }

@@ -2,14 +2,16 @@
 // model's boundary faces push on each other and never pass through.
 //
 // Broad phase: the blocks with a candidate face (the model's boundary faces and the faces of
-// interfaces with a released spring point; with candidates = "cracked", with a broken one) are hashed by their bounding boxes, grown by a skin s,
-// into a uniform cell grid; every node of a candidate face looks up its own cell. A (node, block)
-// pair is kept when the node lies in the block's grown box and the two belong to different bodies (blocks connected through points that are not
-// released), or either lies on a released face; never the node's own block, nor a block holding
-// a node it is bonded to (tied, or joined by a broken point: that point is their contact until
-// it is released). Linear in the number of candidates (counting sort into the hash table). The
-// list is rebuilt when a candidate node has moved more than s/2 since the last build (checked
-// every step: no face and node can meet unseen) or when spring points were released.
+// interfaces with a released spring point; with candidates = "cracked", with a broken one) are
+// hashed by their bounding boxes, grown by their half skins sigma_b (ContactSet::half_skin), into
+// a uniform cell grid; every node of a candidate face looks up the cells of its box grown by its
+// own sigma_n. A (node, block) pair is kept when the node lies in the block's box grown by
+// sigma_n + sigma_b and the two belong to different bodies (blocks connected through points that
+// are not released), or either lies on a released face; never the node's own block, nor a block
+// holding a node it is bonded to (tied, or joined by a broken point: that point is their contact
+// until it is released). Linear in the number of candidates (counting sort into the hash table).
+// The list is rebuilt when a candidate node has moved more than its sigma_n since the last build
+// (checked every step: no face and node can meet unseen) or when spring points were released.
 //
 // Each step, a pair that held no contact and whose node is outside the block's bounding sphere or
 // in front of one of its face planes (both computed once per block) is skipped: only the pairs
@@ -53,7 +55,8 @@ namespace cdem {
 // Plain settings ([contact] of the case).
 struct ContactSettings {
   bool enabled = false;
-  double skin = 0;             // m; 0: 0.25 x the median block size
+  double skin = 0;             // m; > 0: one skin for every block; 0: each block's own
+                               // (0.25 x its size; the broad phase below)
   double friction = -1;        // mu; < 0: tan(phi_r) of the interface material of the region pair
   double damping_ratio = 0;    // zeta
   double stiffness_factor = 1; // x the budget stiffness (<= 1)
@@ -96,7 +99,16 @@ struct TetGeom {
 struct ContactSet {
   ContactSettings cfg;
   bool enabled = false;
+  // The reference skin (m): the one asked, or 0.25 x the median block size. It sets the released
+  // faces' overlap tolerance (kReleaseDrift x skin, contact.cpp) for every block.
   double skin = 0;
+  // Per block, half its skin sigma_b (m): the skin asked / 2, or by default 0.125 x the block's
+  // own size (the largest extent of its box at set-up, block_extent). A (node, block) pair is listed when the node lies within sigma_n + sigma_b of the
+  // block's box (sigma_n: that of the node's block), and the list is rebuilt once a candidate
+  // node has moved more than its own sigma_n: neither side can then have closed the gap unseen.
+  // One global skin (until 4 Dec 2026) was a quarter of the median block, 2.5 element sizes in
+  // a graded mesh's fine zone, where a node then saw ~100 blocks (contact_broad_phase.cpp).
+  std::vector<double> half_skin;
   int dim = 0;
   // per block face slot 4 b + k (k < 4): the interface it belongs to, -1 for a boundary face
   std::vector<std::int32_t> face_iface;
@@ -109,6 +121,17 @@ struct ContactSet {
   std::vector<std::int32_t> cand_faces;  // face slots
   std::vector<std::int32_t> cand_nodes;  // ascending
   std::vector<Vec3> x_build;             // per candidate node, at the last build
+  std::vector<double> cand_lim2;         // per candidate node, sigma_n^2 (the rebuild trigger;
+                                         // from half_skin in index_pairs)
+  // The other nodes of the blocks with a candidate face (off every candidate face): watched by
+  // the trigger too, since the block's box is what the pairs were listed against, and a block
+  // that stretches moves them (ascending; their place at the build; sigma_b^2)
+  std::vector<std::int32_t> watch_nodes;
+  std::vector<Vec3> watch_x;
+  std::vector<double> watch_lim2;
+  // rebuild at the next step whatever the trigger says: a checkpoint of a list built on one
+  // skin for every block, before each block had its own (a larger sigma there would not hold)
+  bool rebuild_due = false;
   std::vector<std::int32_t> pair_node, pair_block;
   // the previous build's pairs (kept for their capacity: a rebuild lists the new pairs here and
   // swaps) and, per new pair, its index among them (-1: a new pair), by which the pairs' state is
@@ -237,6 +260,10 @@ constexpr double kContactRhoCap = 20.0;
 // The blocks per group of the sleep's local clocks (ContactSet::grp_clock): 16 tetrahedra, 64
 // nodes, a lump of about 2.5 block sizes across in the Hilbert-ordered mesh.
 constexpr std::int64_t kSleepGroup = 16;
+
+// The largest extent of block b's bounding box (m), in its present place: the default skin's
+// measure of a block's size.
+double block_extent(const Model& m, std::size_t b);
 
 // Set-up from the model (its interface materials give the friction, the stiffness budget as in
 // ties.hpp / springs.hpp). omega2_max: the blocks' omega_max^2 (tied mode), 0 in springs mode.

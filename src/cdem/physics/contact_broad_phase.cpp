@@ -112,13 +112,16 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   cs.cand_nodes.erase(std::unique(cs.cand_nodes.begin(), cs.cand_nodes.end()), cs.cand_nodes.end());
   cs.x_build.resize(cs.cand_nodes.size());
   for (std::size_t j = 0; j < cs.cand_nodes.size(); ++j) cs.x_build[j] = m.x[cs.cand_nodes[j]];
-  // 4. Grid: the box of each block with a candidate face, grown by the skin, registered in every
-  // cell it overlaps (cell size: the median grown box, so a box covers 2^dim cells or a few more;
-  // at twice that, a node's cell held 8 times as many boxes to test, most of the rebuild's time in
-  // the late SPEC 5.3 cylinder). A node outside it is more than a skin away from the block, so it cannot
-  // reach the block before the next build (each of the two moves less than skin / 2). (Boxes of
-  // the candidate faces grown by the skin and half the block's size, as before, held 3-5 times
-  // as many nodes per block in a graded mesh: small blocks near a large one.)
+  // 4. Grid: the box of each block with a candidate face, grown by its half skin sigma_b,
+  // registered in every cell it overlaps; each node looks up the cells its own box (grown by its
+  // sigma_n) overlaps, and a pair is kept when the node lies in the block's box grown by
+  // sigma_b + sigma_n. A node outside it cannot reach the block before the next build (it moves
+  // less than sigma_n, the block's nodes less than sigma_b). Cell size: the median box grown by
+  // 2 sigma_b on each side (with one skin everywhere, the box grown by the skin), so a box
+  // covers 2^dim cells or a few more; at twice that, a node's cell held 8 times as many boxes to
+  // test, most of the rebuild's time in the late SPEC 5.3 cylinder. (Boxes of the candidate
+  // faces grown by the skin and half the block's size, as before, held 3-5 times as many nodes
+  // per block in a graded mesh: small blocks near a large one.)
   std::vector<std::int32_t> cand_block;     // ascending
   std::vector<std::uint8_t> cand_released;  // the block has a candidate face that is released
   for (const auto f : cs.cand_faces) {
@@ -127,19 +130,27 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
     if (cs.face_iface[f] >= 0 && iface_released[cs.face_iface[f]]) cand_released.back() = 1;
   }
   const std::size_t nf = cand_block.size();
-  std::vector<Vec3> lo(nf), hi(nf);
+  // the trigger's other nodes: those of the candidate blocks off every candidate face
+  cs.watch_nodes.clear();
+  for (const auto bf : cand_block)
+    for (auto qn = m.block_first_node[bf]; qn < m.block_first_node[bf + 1]; ++qn)
+      if (!std::binary_search(cs.cand_nodes.begin(), cs.cand_nodes.end(), qn)) cs.watch_nodes.push_back(qn);
+  cs.watch_x.resize(cs.watch_nodes.size());
+  for (std::size_t j = 0; j < cs.watch_nodes.size(); ++j) cs.watch_x[j] = m.x[cs.watch_nodes[j]];
+  std::vector<Vec3> lo(nf), hi(nf);  // the block's box (not grown)
   std::vector<double> ext(nf);
+  double reach = 0;                  // the largest |coordinate| of the boxes
   for (std::size_t j = 0; j < nf; ++j) {
     const std::int32_t bf = cand_block[j];
     Vec3 a = m.x[m.block_first_node[bf]], b = a;
     for (auto qn = m.block_first_node[bf] + 1; qn < m.block_first_node[bf + 1]; ++qn)
       for (int d = 0; d < 3; ++d) a[d] = std::min(a[d], m.x[qn][d]), b[d] = std::max(b[d], m.x[qn][d]);
-    for (int d = 0; d < cs.dim; ++d) a[d] -= cs.skin, b[d] += cs.skin;
     lo[j] = a;
     hi[j] = b;
+    for (int d = 0; d < cs.dim; ++d) reach = std::max({reach, std::abs(a[d]), std::abs(b[d])});
     double e = 0;
     for (int d = 0; d < cs.dim; ++d) e = std::max(e, b[d] - a[d]);
-    ext[j] = e;
+    ext[j] = e + 4.0 * cs.half_skin[bf];
   }
   cs.pair_node.clear();
   cs.pair_block.clear();
@@ -147,25 +158,33 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
     std::vector<double> sorted_ext = ext;
     std::nth_element(sorted_ext.begin(), sorted_ext.begin() + nf / 2, sorted_ext.end());
     const double cell = std::max(sorted_ext[nf / 2], 1e-12);
+    // (the registered boxes are padded by a hair of a cell and a few rounding units of the
+    // largest coordinate, so that rounding in the two grown boxes cannot hide a cell the exact
+    // test below would accept, even far from the origin)
+    const double pad = 1e-9 * cell + 8 * std::numeric_limits<double>::epsilon() * reach;
     std::size_t tsize = 1;
     while (tsize < 2 * nf) tsize <<= 1;
     const std::uint64_t mask = tsize - 1;
     auto idx = [&](double v) { return static_cast<std::int64_t>(std::floor(v / cell)); };
-    auto for_cells = [&](std::size_t j, auto&& fn) {
-      const std::int64_t i0 = idx(lo[j].x), i1 = idx(hi[j].x), j0 = idx(lo[j].y), j1 = idx(hi[j].y);
-      const std::int64_t k0 = cs.dim == 3 ? idx(lo[j].z) : 0, k1 = cs.dim == 3 ? idx(hi[j].z) : 0;
-      for (auto a = i0; a <= i1; ++a)
-        for (auto b = j0; b <= j1; ++b)
-          for (auto c = k0; c <= k1; ++c) fn(cell_hash(a, b, c) & mask);
+    auto for_cells = [&](const Vec3& a, const Vec3& b, auto&& fn) {
+      const std::int64_t i0 = idx(a.x), i1 = idx(b.x), j0 = idx(a.y), j1 = idx(b.y);
+      const std::int64_t k0 = cs.dim == 3 ? idx(a.z) : 0, k1 = cs.dim == 3 ? idx(b.z) : 0;
+      for (auto i = i0; i <= i1; ++i)
+        for (auto j = j0; j <= j1; ++j)
+          for (auto k = k0; k <= k1; ++k) fn(cell_hash(i, j, k) & mask);
+    };
+    auto block_cells = [&](std::size_t j, auto&& fn) {
+      const double g = cs.half_skin[cand_block[j]] + pad;
+      for_cells(lo[j] - Vec3{g, g, g}, hi[j] + Vec3{g, g, g}, fn);
     };
     cs.bucket_offset.assign(tsize + 1, 0);
-    for (std::size_t j = 0; j < nf; ++j) for_cells(j, [&](std::uint64_t h) { ++cs.bucket_offset[h + 1]; });
+    for (std::size_t j = 0; j < nf; ++j) block_cells(j, [&](std::uint64_t h) { ++cs.bucket_offset[h + 1]; });
     for (std::size_t h = 0; h < tsize; ++h) cs.bucket_offset[h + 1] += cs.bucket_offset[h];
     cs.bucket_entry.resize(cs.bucket_offset[tsize]);
     {
       std::vector<std::int32_t> fill(cs.bucket_offset.begin(), cs.bucket_offset.end() - 1);
       for (std::size_t j = 0; j < nf; ++j)
-        for_cells(j, [&](std::uint64_t h) { cs.bucket_entry[fill[h]++] = static_cast<std::int32_t>(j); });
+        block_cells(j, [&](std::uint64_t h) { cs.bucket_entry[fill[h]++] = static_cast<std::int32_t>(j); });
     }
     // 5. Pairs, node by node (ascending), blocks ascending: each thread takes a contiguous
     // range of the candidate nodes and lists its pairs; the lists are joined in thread order, so
@@ -180,23 +199,28 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
       std::vector<std::int32_t> near_blocks;
       std::vector<std::int32_t>& out_node = t_node[static_cast<std::size_t>(t)];
       std::vector<std::int32_t>& out_block = t_block[static_cast<std::size_t>(t)];
+      std::int32_t bn = 0;  // the node's block, found by walking up (the nodes ascend)
       for (std::int64_t jn = ncn * t / ntt; jn < ncn * (t + 1) / ntt; ++jn) {
         const std::int32_t n = cs.cand_nodes[static_cast<std::size_t>(jn)];
         const Vec3 x = m.x[n];
-        const auto h = cell_hash(idx(x.x), idx(x.y), cs.dim == 3 ? idx(x.z) : 0) & mask;
-        const std::int32_t bn = m.node_block(static_cast<std::size_t>(n));
+        if (jn == ncn * t / ntt) bn = m.node_block(static_cast<std::size_t>(n));
+        while (m.block_first_node[bn + 1] <= n) ++bn;
+        const double sn = cs.half_skin[bn];
         near_blocks.clear();
-        for (auto e = cs.bucket_offset[h]; e < cs.bucket_offset[h + 1]; ++e) {
-          const auto j = static_cast<std::size_t>(cs.bucket_entry[e]);
-          bool inside = true;
-          for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= lo[j][d] && x[d] <= hi[j][d];
-          if (!inside) continue;
-          const std::int32_t bf = cand_block[j];
-          if (bf == bn) continue;
-          const bool released = cs.on_released[n] || cand_released[j];
-          if (cs.body[bf] == cs.body[bn] && !released) continue;
-          near_blocks.push_back(bf);
-        }
+        for_cells(x - Vec3{sn, sn, sn}, x + Vec3{sn, sn, sn}, [&](std::uint64_t h) {
+          for (auto e = cs.bucket_offset[h]; e < cs.bucket_offset[h + 1]; ++e) {
+            const auto j = static_cast<std::size_t>(cs.bucket_entry[e]);
+            const std::int32_t bf = cand_block[j];
+            const double g = cs.half_skin[bf] + sn;
+            bool inside = true;
+            for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= lo[j][d] - g && x[d] <= hi[j][d] + g;
+            if (!inside) continue;
+            if (bf == bn) continue;
+            const bool released = cs.on_released[n] || cand_released[j];
+            if (cs.body[bf] == cs.body[bn] && !released) continue;
+            near_blocks.push_back(bf);
+          }
+        });
         std::sort(near_blocks.begin(), near_blocks.end());
         near_blocks.erase(std::unique(near_blocks.begin(), near_blocks.end()), near_blocks.end());
         for (auto bf : near_blocks) {
@@ -272,6 +296,7 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   index_pairs(m, cs);
   cs.released_seen = m.released_points;
   cs.release_drift = 0;
+  cs.rebuild_due = false;
 }
 
 void reset_contact_sleep(const Model& m, ContactSet& cs) {
@@ -287,6 +312,17 @@ void index_pairs(const Model& m, ContactSet& cs) {
   // The distinct blocks of the pairs (their bounding spheres are computed once per step for the
   // quick reject) and the step's work lists, sized here so that a step allocates nothing.
   const std::size_t npair = cs.pair_node.size();
+  // the rebuild trigger's limit per candidate node: its block's sigma_n, squared
+  cs.cand_lim2.resize(cs.cand_nodes.size());
+  for (std::size_t j = 0, b = 0; j < cs.cand_nodes.size(); ++j) {
+    while (m.block_first_node[b + 1] <= cs.cand_nodes[j]) ++b;
+    cs.cand_lim2[j] = cs.half_skin[b] * cs.half_skin[b];
+  }
+  cs.watch_lim2.resize(cs.watch_nodes.size());
+  for (std::size_t j = 0, b = 0; j < cs.watch_nodes.size(); ++j) {
+    while (m.block_first_node[b + 1] <= cs.watch_nodes[j]) ++b;
+    cs.watch_lim2[j] = cs.half_skin[b] * cs.half_skin[b];
+  }
   cs.block_slot.assign(m.n_blocks(), -1);
   cs.cblock.clear();
   cs.pair_cb.resize(npair);

@@ -28,6 +28,15 @@ const InterfaceMaterial* iface_material_of(const Model& m, const std::string& ra
 
 }  // namespace
 
+double block_extent(const Model& m, std::size_t b) {
+  Vec3 lo = m.x[m.block_first_node[b]], hi = lo;
+  for (auto q = m.block_first_node[b] + 1; q < m.block_first_node[b + 1]; ++q)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.x[q][d]), hi[d] = std::max(hi[d], m.x[q][d]);
+  double e = 0;
+  for (int d = 0; d < m.dim; ++d) e = std::max(e, hi[d] - lo[d]);
+  return e;
+}
+
 ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta, double omega2_max) {
   ContactSet cs;
   cs.cfg = cfg;
@@ -99,15 +108,21 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
       cs.shear_ratio = mat.shear() / mat.youngs;
       break;
     }
-  // Skin.
+  // Skin: the one asked for every block, or each block's own (a quarter of its size), and the
+  // reference skin (the one asked, or a quarter of the median block size).
   if (cfg.skin > 0) {
     cs.skin = cfg.skin;
+    cs.half_skin.assign(nb, 0.5 * cfg.skin);
   } else {
     std::vector<double> sz(m.block_size.begin(), m.block_size.end());
     if (!sz.empty()) {
       std::nth_element(sz.begin(), sz.begin() + sz.size() / 2, sz.end());
       cs.skin = 0.25 * sz[sz.size() / 2];
     }
+    // (the box's extent, not L_c = (6 V)^(1/3): a sliver reaches as far as a well-shaped block
+    // of its edges, though its volume is small)
+    cs.half_skin.resize(nb);
+    for (std::size_t b = 0; b < nb; ++b) cs.half_skin[b] = 0.125 * block_extent(m, b);
   }
   return cs;
 }
@@ -167,7 +182,7 @@ double contact_dissipated(const ContactSet& cs) {
 
 std::size_t contact_bytes(const ContactSet& cs) {
   auto b = [](const auto&... v) { return ((v.capacity() * sizeof(v[0])) + ... + std::size_t{0}); };
-  return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.pair_node,
+  return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.half_skin, cs.cand_lim2, cs.watch_nodes, cs.watch_x, cs.watch_lim2, cs.pair_node,
            cs.pair_block, cs.pair_node_prev, cs.pair_block_prev, cs.pair_from, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,

@@ -56,6 +56,19 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.cand_faces", cs.cand_faces);
   ar.io("contact.cand_nodes", cs.cand_nodes);
   ar.io("contact.x_build", cs.x_build);
+  // the trigger's other nodes (absent in checkpoints written before each block had its own skin:
+  // their list was built on one skin, so it is rebuilt at the next step)
+  if (!ar.loading() || ar.has("contact.watch_x")) {
+    ar.io("contact.watch_nodes", cs.watch_nodes);
+    ar.io("contact.watch_x", cs.watch_x);
+    std::uint8_t due = cs.rebuild_due ? 1 : 0;
+    ar.io("contact.rebuild_due", due);
+    cs.rebuild_due = due != 0;
+  } else {
+    cs.watch_nodes.clear();
+    cs.watch_x.clear();
+    cs.rebuild_due = true;
+  }
   ar.io("contact.pair_node", cs.pair_node);
   ar.io("contact.pair_block", cs.pair_block);
   ar.io("contact.pair_fn", cs.pair_fn);

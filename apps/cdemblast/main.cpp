@@ -108,7 +108,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets, int
     for (double s : ct.half_skin) smin = std::min(smin, 2 * s), smax = std::max(smax, 2 * s);
     const std::string skin =
         c.contact.skin > 0 ? fmt::format("skin {:.3g} m", ct.skin)
-                           : fmt::format("skin a quarter of each block's size ({:.3g} to {:.3g} m)", smin, smax);
+                           : fmt::format("skin a quarter of each block's extent ({:.3g} to {:.3g} m)", smin, smax);
     fmt::print("contact     on: node against {}{}, {}, penalty {:.3g} to {:.3g} N/m, "
                "friction {}, damping ratio {}\n",
                m.dim == 3 ? "triangle" : "edge", ct.edges ? ", edge against edge" : "", skin,

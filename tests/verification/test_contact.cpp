@@ -336,9 +336,8 @@ TEST(ContactFast, EachBlocksOwnSkin) {
   for (std::size_t p = 0; p < cw.pair_node.size(); ++p) {
     const std::int32_t n = cw.pair_node[p], b = cw.pair_block[p];
     const double g = cs.half_skin[b] + cs.half_skin[m.node_block(static_cast<std::size_t>(n))];
-    Vec3 lo = m.x[m.block_first_node[b]], hi = lo;
-    for (auto q = m.block_first_node[b]; q < m.block_first_node[b + 1]; ++q)
-      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.x[q][d]), hi[d] = std::max(hi[d], m.x[q][d]);
+    Vec3 lo, hi;
+    m.block_box(static_cast<std::size_t>(b), lo, hi);
     bool in = true;
     for (int d = 0; d < 3; ++d) in = in && m.x[n][d] >= lo[d] - g && m.x[n][d] <= hi[d] + g;
     if (in) expect.emplace_back(n, b);

@@ -70,6 +70,12 @@ struct Model {
     return static_cast<std::int32_t>(it - block_first_node.begin()) - 1;
   }
   std::vector<std::int32_t> node_vertex;  // the mesh vertex it was split from
+  // The bounding box of block b's nodes in their present place (x).
+  void block_box(std::size_t b, Vec3& lo, Vec3& hi) const {
+    lo = hi = x[static_cast<std::size_t>(block_first_node[b])];
+    for (auto n = block_first_node[b] + 1; n < block_first_node[b + 1]; ++n)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], x[n][d]), hi[d] = std::max(hi[d], x[n][d]);
+  }
 
   // ---- blocks ----
   std::vector<BlockGroup> groups;

@@ -85,20 +85,19 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     due = cs.release_drift > kReleaseDrift * cs.skin;
   }
   if (!due) {
-    const auto nc = static_cast<std::int64_t>(cs.cand_nodes.size());
-    int moved = 0;
-#pragma omp parallel for schedule(static) reduction(| : moved)
-    for (std::int64_t j = 0; j < nc; ++j) {
-      const Vec3 d = m.x[cs.cand_nodes[j]] - cs.x_build[j];
-      moved |= dot(d, d) > cs.cand_lim2[j];
-    }
-    const auto nw = static_cast<std::int64_t>(cs.watch_nodes.size());
-#pragma omp parallel for schedule(static) reduction(| : moved)
-    for (std::int64_t j = 0; j < nw; ++j) {
-      const Vec3 d = m.x[cs.watch_nodes[j]] - cs.watch_x[j];
-      moved |= dot(d, d) > cs.watch_lim2[j];
-    }
-    due = moved != 0;
+    // (the candidate nodes, then the candidate blocks' other nodes)
+    auto moved = [&](const std::vector<std::int32_t>& nodes, const std::vector<Vec3>& x0,
+                     const std::vector<double>& lim2) {
+      const auto nn = static_cast<std::int64_t>(nodes.size());
+      int any = 0;
+#pragma omp parallel for schedule(static) reduction(| : any)
+      for (std::int64_t j = 0; j < nn; ++j) {
+        const Vec3 d = m.x[nodes[j]] - x0[j];
+        any |= dot(d, d) > lim2[j];
+      }
+      return any != 0;
+    };
+    due = moved(cs.cand_nodes, cs.x_build, cs.cand_lim2) || moved(cs.watch_nodes, cs.watch_x, cs.watch_lim2);
   }
   if (due) rebuild_contact_pairs(m, cs);
   // The groups' clocks: each grows by the largest |v| dt of its own nodes and of its pairs'

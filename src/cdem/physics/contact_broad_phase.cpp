@@ -142,11 +142,8 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   double reach = 0;                  // the largest |coordinate| of the boxes
   for (std::size_t j = 0; j < nf; ++j) {
     const std::int32_t bf = cand_block[j];
-    Vec3 a = m.x[m.block_first_node[bf]], b = a;
-    for (auto qn = m.block_first_node[bf] + 1; qn < m.block_first_node[bf + 1]; ++qn)
-      for (int d = 0; d < 3; ++d) a[d] = std::min(a[d], m.x[qn][d]), b[d] = std::max(b[d], m.x[qn][d]);
-    lo[j] = a;
-    hi[j] = b;
+    m.block_box(static_cast<std::size_t>(bf), lo[j], hi[j]);
+    const Vec3 a = lo[j], b = hi[j];
     for (int d = 0; d < cs.dim; ++d) reach = std::max({reach, std::abs(a[d]), std::abs(b[d])});
     double e = 0;
     for (int d = 0; d < cs.dim; ++d) e = std::max(e, b[d] - a[d]);
@@ -312,17 +309,16 @@ void index_pairs(const Model& m, ContactSet& cs) {
   // The distinct blocks of the pairs (their bounding spheres are computed once per step for the
   // quick reject) and the step's work lists, sized here so that a step allocates nothing.
   const std::size_t npair = cs.pair_node.size();
-  // the rebuild trigger's limit per candidate node: its block's sigma_n, squared
-  cs.cand_lim2.resize(cs.cand_nodes.size());
-  for (std::size_t j = 0, b = 0; j < cs.cand_nodes.size(); ++j) {
-    while (m.block_first_node[b + 1] <= cs.cand_nodes[j]) ++b;
-    cs.cand_lim2[j] = cs.half_skin[b] * cs.half_skin[b];
-  }
-  cs.watch_lim2.resize(cs.watch_nodes.size());
-  for (std::size_t j = 0, b = 0; j < cs.watch_nodes.size(); ++j) {
-    while (m.block_first_node[b + 1] <= cs.watch_nodes[j]) ++b;
-    cs.watch_lim2[j] = cs.half_skin[b] * cs.half_skin[b];
-  }
+  // the rebuild trigger's limit per watched node (ascending): its block's sigma, squared
+  auto limits = [&](const std::vector<std::int32_t>& nodes, std::vector<double>& lim2) {
+    lim2.resize(nodes.size());
+    for (std::size_t j = 0, b = 0; j < nodes.size(); ++j) {
+      while (m.block_first_node[b + 1] <= nodes[j]) ++b;
+      lim2[j] = cs.half_skin[b] * cs.half_skin[b];
+    }
+  };
+  limits(cs.cand_nodes, cs.cand_lim2);
+  limits(cs.watch_nodes, cs.watch_lim2);
   cs.block_slot.assign(m.n_blocks(), -1);
   cs.cblock.clear();
   cs.pair_cb.resize(npair);

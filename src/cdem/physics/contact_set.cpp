@@ -29,9 +29,8 @@ const InterfaceMaterial* iface_material_of(const Model& m, const std::string& ra
 }  // namespace
 
 double block_extent(const Model& m, std::size_t b) {
-  Vec3 lo = m.x[m.block_first_node[b]], hi = lo;
-  for (auto q = m.block_first_node[b] + 1; q < m.block_first_node[b + 1]; ++q)
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.x[q][d]), hi[d] = std::max(hi[d], m.x[q][d]);
+  Vec3 lo, hi;
+  m.block_box(b, lo, hi);
   double e = 0;
   for (int d = 0; d < m.dim; ++d) e = std::max(e, hi[d] - lo[d]);
   return e;

@@ -18,6 +18,7 @@
 
 #include "bench_models.hpp"
 #include "cdem/explosive/charges.hpp"
+#include "cdem/io/case.hpp"
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/physics/integrate.hpp"
 #include "cdem/physics/springs.hpp"
@@ -139,7 +140,7 @@ void BM_BarLoads(benchmark::State& state) {
   block_forces(m, nullptr);  // volume ratios for eq. 9
   const Case c = bench::box_case(3, bench_models::extent_of(bench_models::make_mesh(Shape::Tet)),
                                  bench_models::kH, InterfaceLaw::MohrCoulomb, 4);
-  BarCharges bars = build_bar_charges(m, c);
+  BarCharges bars = build_bar_charges(m, charge_spec(c));
   AppliedLoads out;
   for (auto _ : state) {
     out.clear();
@@ -160,7 +161,7 @@ void BM_SimulationStep(benchmark::State& state, Shape shape) {
   // As `cdemblast run` sets a case up (prepare_case): the blocks holding the bar's charge get
   // their charge share before the simulation, and the bar bounds the time step.
   Model model = bench_models::base_model(shape);
-  BarCharges bars = build_bar_charges(model, c);
+  BarCharges bars = build_bar_charges(model, charge_spec(c));
   const double dt_bar = make_charge_cavities(model, bars);
   Simulation sim(std::move(model), c);
   sim.limit_dt(dt_bar, "blocks holding bar charges");

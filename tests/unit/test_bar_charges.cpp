@@ -61,7 +61,7 @@ TEST(BarSegmentation, LengthFromSmallestCrossedElement) {
   const Vec3 a0{0.15, 0.05, 0}, a1{0.15, 0.45, 0};  // crosses the thin rows
   const Vec3 b0{0.35, 0.02, 0}, b1{0.35, 0.17, 0};  // rows 0 and 1 only (L_c = 0.1)
   const Case c = bar_case({bar("thin", a0, a1, 0.02), bar("coarse", b0, b1, 0.02)});
-  const BarCharges bc = build_bar_charges(m, c);
+  const BarCharges bc = build_bar_charges(m, charge_spec(c));
   ASSERT_EQ(bc.bars.size(), 2u);
   const std::vector<std::pair<Vec3, Vec3>> ends{{a0, a1}, {b0, b1}};
   const std::vector<int> expected_nseg{7, 2};  // ceil(0.4 / 0.0632) = 7, ceil(0.15 / 0.1) = 2
@@ -88,7 +88,7 @@ TEST(BarSegmentation, LengthFromSmallestCrossedElement) {
 TEST(BarSegmentation, ExactMultipleOfElementSize) {
   const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
   const BarCharges bc =
-      build_bar_charges(m, bar_case({bar("full", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.02)}));
+      build_bar_charges(m, charge_spec(bar_case({bar("full", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.02)})));
   ASSERT_EQ(bc.bars.size(), 1u);
   EXPECT_EQ(bc.n_segments(), 6u);
   EXPECT_NEAR(bc.bars[0].h, 0.1, kRound);
@@ -108,7 +108,7 @@ TEST(BarIgnition, TimesFromInitiationPointBottomAndTop) {
   const HoleDef top = bar("top", {0.45, 0.05, 0}, {0.45, 0.55, 0}, 0.02, 2e-3, true);
   const HoleDef decked = make_hole("decked", {0.35, 0.6, 0}, {0.35, 0.0, 0}, 0.02,
                                    {{0.15, 0.0, false, 0.0}, {0.2, 5e-3, true, 0.1}});
-  const BarCharges bc = build_bar_charges(m, bar_case({bottom, top, decked}));
+  const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bottom, top, decked})));
   ASSERT_EQ(bc.bars.size(), 4u);
   struct Expect {
     std::string hole;
@@ -149,7 +149,7 @@ TEST(BarIgnition, TimesFromInitiationPointBottomAndTop) {
 TEST(BarIgnition, XiRampsLinearlyOverCrossingTime) {
   Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
   BarCharges bc =
-      build_bar_charges(m, bar_case({bar("ramp", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02, 1e-4)}));
+      build_bar_charges(m, charge_spec(bar_case({bar("ramp", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02, 1e-4)})));
   ASSERT_EQ(bc.n_segments(), 5u);
   const double h = bc.bars[0].h, p1 = eos_pressure(bc.eos[0], 1.0);
   EXPECT_NEAR(p1, kP0, kRound * kP0);
@@ -198,7 +198,7 @@ void check_net_force_zero(Model& m, const Case& c) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (std::size_t n = 0; n < m.n_nodes(); ++n)
     for (int d = 0; d < m.dim; ++d) m.x[n][d] += 0.01 * u(gen) * m.block_size[m.node_block(n)];
-  BarCharges bc = build_bar_charges(m, c);
+  BarCharges bc = build_bar_charges(m, charge_spec(c));
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);  // long after ignition: xi = 1 everywhere
   const auto by_block = forces_by_block(m, out);
@@ -255,7 +255,7 @@ TEST(BarLoads, LoneSquareQuadInflatesSymmetrically) {
   }
   // The bar runs down the middle over the full height: r0 / L_c = phi = 2 r0 / s.
   const double d = 0.08, att = std::pow(d / s, 1.25);
-  BarCharges bc = build_bar_charges(m, bar_case({bar("lone", {0.1, 0.0, 0}, {0.1, 0.2, 0}, d)}));
+  BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("lone", {0.1, 0.0, 0}, {0.1, 0.2, 0}, d)})));
   ASSERT_EQ(bc.elem_block.size(), 1u);
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);
@@ -294,7 +294,7 @@ TEST(BarLoads, LoneRegularTetInflatesSymmetrically) {
   // phi = pi r0^2 H / V (H the altitude the bar runs along), r0 / L_c = sqrt(phi) in 3D.
   const double d = 0.02, vol = std::abs(dot(v[1] - v[0], cross(v[2] - v[0], v[3] - v[0]))) / 6.0;
   const double phi = 3.14159265358979323846 * 0.01 * 0.01 * norm(v[0] - opp) / vol;
-  BarCharges bc = build_bar_charges(m, bar_case({bar("lone", opp, v[0], d)}));
+  BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("lone", opp, v[0], d)})));
   ASSERT_EQ(bc.elem_block.size(), 1u);
   EXPECT_NEAR(bc.seg_v0[0], 3.14159265358979323846 * 0.01 * 0.01 * bc.bars[0].h,
               kRound * bc.seg_v0[0]);
@@ -318,7 +318,7 @@ TEST(BarBinding, ThroughMiddleOfColumn2D) {
   for (bool tris : {false, true}) {
     const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
     const BarCharges bc =
-        build_bar_charges(m, bar_case({bar("mid", {0.25, 0.02, 0}, {0.25, 0.58, 0}, 0.02)}));
+        build_bar_charges(m, charge_spec(bar_case({bar("mid", {0.25, 0.02, 0}, {0.25, 0.58, 0}, 0.02)})));
     const auto expected = blocks_where(m, [](Vec3 c) { return column_of(c, 0.1) == 2; });
     EXPECT_EQ(expected.size(), tris ? 12u : 6u);
     EXPECT_EQ(loaded_blocks(bc), expected) << (tris ? "triangles" : "quads");
@@ -334,7 +334,7 @@ TEST(BarBinding, AlongSharedEdge2D) {
   for (bool tris : {false, true}) {
     const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
     const Vec3 a{0.3, 0.05, 0}, b{0.3, 0.55, 0};
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("edge", a, b, 0.02)}));
+    const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("edge", a, b, 0.02)})));
     const auto ref = sampled_crossed_blocks(m, a, b, 4000);
     if (!tris) {
       const auto expected = blocks_where(m, [](Vec3 c) {
@@ -363,7 +363,7 @@ TEST(BarBinding, AlongSharedEdge2D) {
 TEST(BarBinding, InclinedBar2D) {
   const Model m = rock_model(tri_grid(6, 6, 0.6, 0.6));
   const Vec3 a{0.07, 0.04, 0}, b{0.52, 0.57, 0};
-  const BarCharges bc = build_bar_charges(m, bar_case({bar("incl", a, b, 0.02)}));
+  const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("incl", a, b, 0.02)})));
   EXPECT_EQ(loaded_blocks(bc), sampled_crossed_blocks(m, a, b, 20000));
   // Segment by segment too.
   const auto& br = bc.bars[0];
@@ -392,7 +392,7 @@ TEST(BarBinding, Tetrahedra3D) {
                                 {"face", {0.2, 0.13, 0.05}, {0.2, 0.13, 0.35}, false},
                                 {"edge", {0.2, 0.2, 0.05}, {0.2, 0.2, 0.35}, false}};
   for (const auto& l : lines) {
-    const BarCharges bc = build_bar_charges(m, bar_case({bar(l.name, l.a, l.b, 0.02)}));
+    const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar(l.name, l.a, l.b, 0.02)})));
     const auto ref = sampled_crossed_blocks(m, l.a, l.b, 6000);
     const auto bound = loaded_blocks(bc);
     if (l.exact)
@@ -428,7 +428,7 @@ TEST(BarBinding, NoBindingThroughPointContacts) {
   {
     const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
     const BarCharges bc =
-        build_bar_charges(m, bar_case({bar("ends", {0.25, 0.1, 0}, {0.25, 0.4, 0}, 0.02)}));
+        build_bar_charges(m, charge_spec(bar_case({bar("ends", {0.25, 0.1, 0}, {0.25, 0.4, 0}, 0.02)})));
     EXPECT_EQ(loaded_blocks(bc), blocks_where(m, [](Vec3 c) {
                 return column_of(c, 0.1) == 2 && row_of(c, 0.1) >= 1 && row_of(c, 0.1) <= 3;
               }));
@@ -442,14 +442,14 @@ TEST(BarBinding, NoBindingThroughPointContacts) {
   {
     const Model m = rock_model(tri_grid(6, 6, 0.6, 0.6));
     const Vec3 a{0.3, 0.05, 0}, b{0.3, 0.55, 0};
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("edge", a, b, 0.02)}));
+    const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("edge", a, b, 0.02)})));
     EXPECT_EQ(loaded_blocks(bc), sampled_crossed_blocks(m, a, b, 4000))
         << "triangles along an edge";
   }
   const Model m = rock_model(tet_box(4, 4, 4, 0.4, 0.4, 0.4));
   for (const auto& [a, b] : {std::pair<Vec3, Vec3>{{0.2, 0.13, 0.05}, {0.2, 0.13, 0.35}},
                              std::pair<Vec3, Vec3>{{0.2, 0.2, 0.05}, {0.2, 0.2, 0.35}}}) {
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("tets", a, b, 0.02)}));
+    const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("tets", a, b, 0.02)})));
     EXPECT_EQ(loaded_blocks(bc), sampled_crossed_blocks(m, a, b, 6000))
         << "tets at x = " << a.x << ", y = " << a.y;
   }
@@ -465,8 +465,8 @@ TEST(BarBinding, BarCloseToVerticesIsNotAVoid) {
     const Model m = rock_model(tris ? tri_grid(6, 6, 0.6, 0.6) : quad_grid(6, 6, 0.6, 0.6));
     for (double e : {0.0, 1e-7, 1e-6, 3e-6, 1e-5, 1e-4}) {
       BarCharges bc;
-      ASSERT_NO_THROW(bc = build_bar_charges(m, bar_case({bar("near_vertex", {0.05, 0.05 + e, 0},
-                                                              {0.55, 0.55 + e, 0}, 0.02)})))
+      ASSERT_NO_THROW(bc = build_bar_charges(m, charge_spec(bar_case({bar("near_vertex", {0.05, 0.05 + e, 0},
+                                                              {0.55, 0.55 + e, 0}, 0.02)}))))
           << (tris ? "triangles" : "quads") << ", e = " << e;
       const auto bound = loaded_blocks(bc);
       const auto diagonal = blocks_where(m, [&](Vec3 c) {
@@ -495,7 +495,7 @@ TEST(BarVolume, FollowsBoundElementsVolumeRatio) {
   // strain. The end rows 0 and 5 hold it over half their height only: phi = 0.25.
   const double d = 0.1;
   auto att_of_row = [](int r) { return std::pow(r == 0 || r == 5 ? 0.25 : 0.5, 1.25); };
-  BarCharges bc = build_bar_charges(m, bar_case({bar("vol", {0.3, 0.05, 0}, {0.3, 0.55, 0}, d)}));
+  BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("vol", {0.3, 0.05, 0}, {0.3, 0.55, 0}, d)})));
   ASSERT_EQ(bc.n_segments(), 5u);
   std::map<std::int32_t, double> jv;
   for (std::size_t b = 0; b < m.n_blocks(); ++b) {
@@ -567,7 +567,7 @@ TEST(BarAttenuation, FactorAndCap) {
     holes.push_back(
         bar(name, {hs[k].x, 0.0, 0}, {hs[k].x, 0.6, 0}, hs[k].d, 0.0, false, hs[k].a));
   }
-  BarCharges bc = build_bar_charges(m, bar_case(holes));
+  BarCharges bc = build_bar_charges(m, charge_spec(bar_case(holes)));
   AppliedLoads out;
   bar_loads(m, bc, out, 1.0);
   ASSERT_EQ(bc.elem_block.size(), 30u);
@@ -587,7 +587,7 @@ TEST(BarAttenuation, ElementSizeOption) {
   Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
   HoleDef h = bar("lit", {0.05, 0.0, 0}, {0.05, 0.6, 0}, 0.02);
   h.lc_element_size = true;
-  BarCharges bc = build_bar_charges(m, bar_case({h}));
+  BarCharges bc = build_bar_charges(m, charge_spec(bar_case({h})));
   ASSERT_EQ(bc.elem_block.size(), 6u);
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     EXPECT_NEAR(bc.elem_atten[i], std::pow(0.1, 1.25), kRound);
@@ -604,7 +604,7 @@ TEST(BarCharge, VolumeSharedAmongBoundTets) {
   for (const auto& ends : std::vector<std::pair<Vec3, Vec3>>{
            {{0.1234, 0.1567, 0.0}, {0.2345, 0.1789, 0.4}},   // oblique, through interiors
            {{0.2, 0.2, 0.0}, {0.2, 0.2, 0.4}}}) {            // along cell edges
-    const BarCharges bc = build_bar_charges(m, bar_case({bar("b", ends.first, ends.second, 2 * r0)}));
+    const BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("b", ends.first, ends.second, 2 * r0)})));
     double sum = 0;
     for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
       sum += bc.elem_phi[i] * m.block_volume0[bc.elem_block[i]];
@@ -628,7 +628,7 @@ TEST(BarCharge, MostlyChargeBlocksGlued) {
   for (const auto& v : std::vector<Variant>{{0.15, 1.5, true}, {0.055, 0.55, true}, {0.045, 0.45, false}}) {
     Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
     const Model ref = m;
-    BarCharges bc = build_bar_charges(m, bar_case({bar("c", {0.25, 0.0, 0}, {0.25, 0.6, 0}, v.d)}));
+    BarCharges bc = build_bar_charges(m, charge_spec(bar_case({bar("c", {0.25, 0.0, 0}, {0.25, 0.6, 0}, v.d)})));
     make_charge_cavities(m, bc);
     std::set<std::int32_t> bound;
     for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
@@ -665,7 +665,7 @@ TEST(BarCharge, CavityMaterialFromChargeShare) {
     const Model ref = m;
     HoleDef h = bar("c", {0.25, 0.0, 0}, {0.25, 0.6, 0}, 0.06);  // phi = 0.6 in its column
     h.cavity = cavity;
-    BarCharges bc = build_bar_charges(m, bar_case({h}));
+    BarCharges bc = build_bar_charges(m, charge_spec(bar_case({h})));
     const double dt = make_charge_cavities(m, bc);
     ASSERT_EQ(bc.elem_block.size(), 6u);
     const double phi = 0.6, lam = ref.mat_lambda[0], G = ref.mat_shear[0];
@@ -714,7 +714,7 @@ std::string input_error(F f) {
 TEST(BarErrors, BarPartlyOutsideMesh) {
   const Model m = rock_model(quad_grid(6, 6, 0.6, 0.6));
   const std::string msg = input_error([&] {
-    build_bar_charges(m, bar_case({bar("poking_out", {0.25, 0.3, 0}, {0.25, 0.8, 0}, 0.02)}));
+    build_bar_charges(m, charge_spec(bar_case({bar("poking_out", {0.25, 0.3, 0}, {0.25, 0.8, 0}, 0.02)})));
   });
   ASSERT_FALSE(msg.empty()) << "no InputError for a bar leaving the mesh";
   EXPECT_NE(msg.find("hole 'poking_out'"), std::string::npos) << msg;
@@ -729,7 +729,7 @@ TEST(BarErrors, BarCrossingVoid) {
   remove_elements(mesh, [](Vec3 c) { return c.y > 0.3 && c.y < 0.4 && c.x > 0.1 && c.x < 0.4; });
   const Model m = rock_model(mesh);
   const std::string msg = input_error([&] {
-    build_bar_charges(m, bar_case({bar("across_void", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)}));
+    build_bar_charges(m, charge_spec(bar_case({bar("across_void", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)})));
   });
   ASSERT_FALSE(msg.empty()) << "no InputError for a bar crossing a void";
   EXPECT_NE(msg.find("hole 'across_void'"), std::string::npos) << msg;
@@ -738,7 +738,7 @@ TEST(BarErrors, BarCrossingVoid) {
       << msg;  // void at y = 0.3
   // The same bar beside the void is fine.
   EXPECT_NO_THROW(
-      build_bar_charges(m, bar_case({bar("beside", {0.45, 0.05, 0}, {0.45, 0.55, 0}, 0.02)})));
+      build_bar_charges(m, charge_spec(bar_case({bar("beside", {0.45, 0.05, 0}, {0.45, 0.55, 0}, 0.02)}))));
 }
 
 TEST(BarErrors, BarThroughExplosiveBlocksRefused) {
@@ -754,7 +754,7 @@ TEST(BarErrors, BarThroughExplosiveBlocksRefused) {
   const Model m = build_model(mesh, {rock(), ex}, {interface_of(InterfaceLaw::Elastic)}, "test");
   const Case c = charge_case({rock(), ex}, {interface_of(InterfaceLaw::Elastic)},
                              {bar("in_charge", {0.25, 0.05, 0}, {0.25, 0.55, 0}, 0.02)});
-  const std::string msg = input_error([&] { build_bar_charges(m, c); });
+  const std::string msg = input_error([&] { build_bar_charges(m, charge_spec(c)); });
   ASSERT_FALSE(msg.empty()) << "a bar through explosive blocks was accepted";
   EXPECT_NE(msg.find("hole 'in_charge'"), std::string::npos) << msg;
   EXPECT_NE(msg.find("explosive blocks"), std::string::npos) << msg;

@@ -120,7 +120,7 @@ double deck_delay(const Case& c, const std::string& hole, std::size_t deck) {
 void expect_ignition(const Case& c, const std::map<std::pair<std::string, int>, double>& t0) {
   const Mesh mesh = load_mesh(c);
   const Model m = build_case_model(c, mesh);
-  const BarCharges bc = build_bar_charges(m, c);
+  const BarCharges bc = build_bar_charges(m, charge_spec(c));
   const double D = 8350;  // the built-in rdx (SPEC 5.3)
   ASSERT_EQ(bc.bars.size(), t0.size());
   for (const auto& b : bc.bars) {

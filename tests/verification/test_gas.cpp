@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "cdem/explosive/charges.hpp"
+#include "cdem/io/case.hpp"
 #include "cdem/explosive/gas.hpp"
 #include "cdem/solver/simulation.hpp"
 #include "verification/charge_builders.hpp"
@@ -130,7 +131,7 @@ TEST(GasCracks, MassConservedInTheCracks) {
   h.gas = GasModel::Cracks;
   Case c = charge_case(mats, ifs, {h});
   Model model = build_model(mesh, mats, ifs, "gas test");
-  BarCharges bc = build_bar_charges(model, c);
+  BarCharges bc = build_bar_charges(model, charge_spec(c));
   const double dt_bar = make_charge_cavities(model, bc);
   Simulation sim(std::move(model), c);
   sim.limit_dt(dt_bar, "bar blocks");

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "cdem/explosive/charges.hpp"
+#include "cdem/io/case.hpp"
 #include "cdem/explosive/eos.hpp"
 #include "cdem/explosive/gas.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
@@ -169,7 +170,7 @@ CavityResult run_cavity(int n_theta) {
                   boundary("yaxis", BoundaryType::Roller)};
 
   Simulation sim(build_model(mesh, mats, ifs, c.path), c);
-  SolidCharges sc = build_solid_charges(sim.model(), c);
+  SolidCharges sc = build_solid_charges(sim.model(), charge_spec(c));
   EXPECT_EQ(sc.block.size(), static_cast<std::size_t>(n_theta));
   sim.add_load([&sc](Model& m, AppliedLoads& out, double t) { solid_loads(m, sc, out, t); });
   sim.limit_dt(sc.dt_limit, "explosive blocks");

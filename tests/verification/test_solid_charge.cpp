@@ -24,6 +24,7 @@
 #include "cdem/physics/springs.hpp"
 #include "cdem/core/error.hpp"
 #include "cdem/explosive/charges.hpp"
+#include "cdem/io/case.hpp"
 #include "cdem/explosive/eos.hpp"
 #include "cdem/solver/simulation.hpp"
 #include "verification/charge_builders.hpp"
@@ -105,7 +106,7 @@ TEST(SolidCharge, LimitDtTwiceKeepsTheSafetyFactor) {
 TEST(SolidCharge, IgnitionTimesFromCentroidDistance) {
   for (bool top : {false, true}) {
     const auto s = solid_setup(1e-5, top);
-    const SolidCharges sc = build_solid_charges(s.model, s.c);
+    const SolidCharges sc = build_solid_charges(s.model, charge_spec(s.c));
     ASSERT_EQ(sc.block.size(), 6u);
     for (std::size_t i = 0; i < sc.block.size(); ++i) {
       const Vec3 cen = centroid0(s.model, sc.block[i]);
@@ -127,7 +128,7 @@ TEST(SolidCharge, BurnFrontArrivalAndPressureInRun) {
   SingleThread one;
   auto s = solid_setup(1e-5, false);
   Simulation sim(std::move(s.model), s.c);
-  SolidCharges sc = build_solid_charges(sim.model(), s.c);
+  SolidCharges sc = build_solid_charges(sim.model(), charge_spec(s.c));
   sim.add_load([&sc](Model& m, AppliedLoads& out, double t) { solid_loads(m, sc, out, t); });
   sim.limit_dt(sc.dt_limit, "explosive blocks");
   const double dt = sim.dt();
@@ -184,7 +185,7 @@ TEST(SolidCharge, BurnFrontArrivalAndPressureInRun) {
 TEST(SolidCharge, PressureFromCurrentBlockVolume) {
   auto s = solid_setup(0.0, false);
   Model& m = s.model;
-  SolidCharges sc = build_solid_charges(m, s.c);
+  SolidCharges sc = build_solid_charges(m, charge_spec(s.c));
   const auto b = sc.block[2];
   const Vec3 cen = centroid0(m, b);
   for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
@@ -215,7 +216,7 @@ TEST(SolidCharge, PressureFromCurrentBlockVolume) {
 TEST(SolidCharge, InvertedBlockIsReportedAndCarriesNoPressure) {
   auto s = solid_setup(0.0, false);
   Model& m = s.model;
-  SolidCharges sc = build_solid_charges(m, s.c);
+  SolidCharges sc = build_solid_charges(m, charge_spec(s.c));
   const auto b = sc.block[3];
   const auto n0 = m.block_first_node[b];
   m.x[n0] = m.x[n0 + 2] + 0.2 * (m.x[n0 + 2] - m.x[n0]);
@@ -256,7 +257,7 @@ TEST(SolidCharge, CollapsedBlockInRunStaysFinite) {
   SingleThread one;
   auto s = solid_setup(0.0, false);
   Simulation sim(std::move(s.model), s.c);
-  SolidCharges sc = build_solid_charges(sim.model(), s.c);
+  SolidCharges sc = build_solid_charges(sim.model(), charge_spec(s.c));
   sim.add_load([&sc](Model& m, AppliedLoads& out, double t) { solid_loads(m, sc, out, t); });
   sim.limit_dt(sc.dt_limit, "explosive blocks");
   // Run until block 0 (the first to ignite) is fully burnt and loaded.
@@ -413,7 +414,7 @@ std::vector<EnergySample> bar_energy_run(int dt_divisor, double* dt_out = nullpt
   if (filled) c.holes[0].diameter = diameter;
   auto make = [&](BarCharges* bars) {
     Model m = build_model(s.mesh, s.mats, s.ifs, "energy test");
-    BarCharges bc = build_bar_charges(m, c);
+    BarCharges bc = build_bar_charges(m, charge_spec(c));
     const double dt_bar = filled ? make_charge_cavities(m, bc) : 0.0;
     Simulation sim(std::move(m), c);
     if (filled) sim.limit_dt(dt_bar, "bar blocks");
@@ -535,7 +536,7 @@ std::unique_ptr<SolidRun> solid_run() {
   auto s = solid_setup(0.0, false);
   const Case c = s.c;
   auto r = std::unique_ptr<SolidRun>(new SolidRun{Simulation(std::move(s.model), c), {}, {}});
-  r->sc = build_solid_charges(r->sim.model(), c);
+  r->sc = build_solid_charges(r->sim.model(), charge_spec(c));
   SolidRun* p = r.get();
   r->sim.add_load([p](Model& m, AppliedLoads& out, double t) {
     const std::size_t first = out.node.size();

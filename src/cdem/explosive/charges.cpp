@@ -60,7 +60,7 @@ void block_bbox(const Model& m, std::int32_t b, Vec3& lo, Vec3& hi) {
     }
 }
 
-std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names, const Case& c,
+std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names, const ChargeSpec& c,
                        const std::string& name) {
   for (std::size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return static_cast<std::int32_t>(i);
@@ -87,8 +87,6 @@ void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
 }
 
 namespace {
-// The face sets the gas cannot vent through: those under a fixed, roller, non-reflecting or
-// velocity condition (more rock or a wall beyond); free and pressure-loaded faces vent.
 // The top deck's gas body: the collar plug is the stemming above that deck (its length, mass
 // and wall shear strength).
 void set_collar_plug(GasBody& gb, const HoleDef& h, double section) {
@@ -102,15 +100,9 @@ void set_collar_plug(GasBody& gb, const HoleDef& h, double section) {
   gb.plug_shear = h.stemming_shear_strength;
 }
 
-std::vector<std::string> closed_face_sets(const Case& c) {
-  std::vector<std::string> out;
-  for (const auto& b : c.boundaries)
-    if (b.type != BoundaryType::Pressure) out.push_back(b.faces);
-  return out;
-}
 }  // namespace
 
-BarCharges build_bar_charges(const Model& m, const Case& c) {
+BarCharges build_bar_charges(const Model& m, const ChargeSpec& c) {
   BarCharges bc;
   std::vector<std::string> eos_names;
   std::vector<std::vector<std::int32_t>> elem_segs;  // by block, filled sparsely
@@ -321,7 +313,7 @@ BarCharges build_bar_charges(const Model& m, const Case& c) {
     }
     bc.elem_bar_offset.push_back(static_cast<std::int32_t>(bc.elem_bar.size()));
   }
-  init_gas_field(m, bc.gas, closed_face_sets(c));
+  init_gas_field(m, bc.gas, c.closed_face_sets);
   // The gas starts in the blocks that hold the charge; where the charge fills its blocks (phi >=
   // 0.5: charge blocks, glued to their neighbours) the cavity's wall is the neighbours' faces.
   for (std::size_t i = 0; i < bc.elem_block.size(); ++i)
@@ -519,7 +511,7 @@ double make_charge_cavities(Model& m, BarCharges& bc) {
   return dt;
 }
 
-SolidCharges build_solid_charges(const Model& m, const Case& c) {
+SolidCharges build_solid_charges(const Model& m, const ChargeSpec& c) {
   SolidCharges sc;
   std::vector<std::string> eos_names;
   struct DeckRef {
@@ -594,7 +586,7 @@ SolidCharges build_solid_charges(const Model& m, const Case& c) {
                                    "inside it; mesh the charge as a region whose material has "
                                    "'explosive' set",
                                    c.path, sc.charges[k].hole, sc.charges[k].deck + 1));
-  init_gas_field(m, sc.gas, closed_face_sets(c));
+  init_gas_field(m, sc.gas, c.closed_face_sets);
   for (std::size_t i = 0; i < sc.block.size(); ++i) {
     seed_gas(m, sc.gas, sc.block[i], sc.charge[i], true);
     sc.gas.bodies[sc.charge[i]].v0 += sc.v0[i];

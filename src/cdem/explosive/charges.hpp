@@ -26,9 +26,9 @@
 
 #include "cdem/explosive/eos.hpp"
 #include "cdem/explosive/gas.hpp"
-#include "cdem/io/case.hpp"
+#include "cdem/explosive/holes.hpp"
 #include "cdem/model/model.hpp"
-#include "cdem/solver/simulation.hpp"
+#include "cdem/physics/applied_loads.hpp"
 
 namespace cdem {
 
@@ -71,7 +71,7 @@ struct BarCharges {
 
 // Builds the bars of every hole with model = "bar". Throws InputError naming the hole and deck
 // when a bar leaves the mesh or crosses a void.
-BarCharges build_bar_charges(const Model& m, const Case& c);
+BarCharges build_bar_charges(const Model& m, const ChargeSpec& c);
 
 // The charge occupies the fraction phi = min(1, elem_phi) of each bound element: that part of
 // the element is explosive (a fluid whose pressure is the EOS), not rock (docs/theory.md,
@@ -114,7 +114,7 @@ struct SolidCharges {
 
 // Binds every explosive block to the solid-model deck that contains it. Throws InputError for
 // an explosive block outside every solid-model deck, or a solid-model hole with no blocks.
-SolidCharges build_solid_charges(const Model& m, const Case& c);
+SolidCharges build_solid_charges(const Model& m, const ChargeSpec& c);
 
 // Loads the rock from the explosive blocks at time t.
 void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);

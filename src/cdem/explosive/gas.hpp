@@ -33,7 +33,7 @@
 #include "cdem/explosive/eos.hpp"
 #include "cdem/explosive/gas_model.hpp"
 #include "cdem/model/model.hpp"
-#include "cdem/solver/simulation.hpp"
+#include "cdem/physics/applied_loads.hpp"
 
 namespace cdem {
 

@@ -307,4 +307,14 @@ Case parse_case(std::string_view text, const std::string& path,
   return c;
 }
 
+ChargeSpec charge_spec(const Case& c) {
+  ChargeSpec s;
+  s.path = c.path;
+  s.holes = c.holes;
+  s.explosives = c.explosives;
+  for (const auto& b : c.boundaries)
+    if (b.type != BoundaryType::Pressure) s.closed_face_sets.push_back(b.faces);
+  return s;
+}
+
 }  // namespace cdem

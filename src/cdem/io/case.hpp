@@ -12,6 +12,7 @@
 #include "cdem/core/vec3.hpp"
 #include "cdem/explosive/eos.hpp"
 #include "cdem/explosive/gas_model.hpp"
+#include "cdem/explosive/holes.hpp"
 #include "cdem/mesh/gmsh_io.hpp"
 #include "cdem/model/boundary_spec.hpp"
 #include "cdem/model/materials.hpp"
@@ -32,45 +33,6 @@ struct InitialStress {
   double reference_level = 0;
 };
 
-// A named explosive: a built-in one or one given in [[explosive]].
-struct ExplosiveDef {
-  std::string name;
-  Eos eos;
-};
-
-// One charge (deck) of a hole, placed from the bottom up (SPEC 2).
-struct Deck {
-  std::string explosive;    // name of an ExplosiveDef
-  double length = 0;        // m
-  double delay = 0;         // initiation time t_D0 (s) = the group's delay + own_delay
-  double own_delay = 0;     // the deck's own `delay` key (s)
-  bool initiate_top = false;  // default: initiated at the deck's bottom
-  Vec3 bottom, top;         // derived end points
-  Vec3 initiation() const { return initiate_top ? top : bottom; }
-};
-
-enum class ChargeModel { Bar, Solid };
-
-
-
-struct HoleDef {
-  std::string name;
-  std::string group;        // delay group ("" none): its [delays] entry adds to every deck's delay
-  Vec3 collar, end;         // collar (top) and bottom of the hole
-  double diameter = 0;      // m
-  ChargeModel model = ChargeModel::Bar;
-  double attenuation_exponent = 1.25;  // a in (r0 / L_c)^a (bar model)
-  bool cavity = true;       // bar model: the charge's share of a bound element is not rock
-  bool lc_element_size = false;  // bar model: L_c in (r0/L_c)^a is the element size (SPEC read
-                                 // literally), not its equivalent radius about the bar
-  GasModel gas = GasModel::Cracks;   // bar model: the products' volume and venting
-  double stemming_density = 2000;    // kg/m^3, the collar stemming plug
-  double stemming_shear_strength = 1e6;  // Pa, wall shear stress resisting the plug
-  double vent_coefficient = 1.0;     // discharge coefficient of the choked vents
-  std::vector<Deck> decks;
-  std::vector<std::pair<double, double>> stemming;  // (from, to) distances from the bottom (m)
-  double length() const { return norm(collar - end); }
-};
 
 // How intact interfaces act (docs/theory.md "Tied interfaces"): "tied" (the nodes split from a
 // vertex move as one while the points joining them are intact; springs only where the rock has
@@ -140,6 +102,11 @@ struct Case {
 // of at most kMaxCaseFileBytes (input_file.hpp); its text is checked (case_text.hpp) before
 // the TOML parser sees it.
 Case load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// The plain data the explosive models are built from (explosive/holes.hpp): the case's holes and
+// explosives, and the face sets of its boundary conditions other than a pressure (the gas does
+// not vent through them).
+ChargeSpec charge_spec(const Case& c);
 
 // load_case on text already read; `path` names it and places relative paths. No file is read.
 Case parse_case(std::string_view text, const std::string& path,

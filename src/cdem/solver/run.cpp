@@ -230,9 +230,10 @@ PreparedCase prepare_case(const Case& c, const Mesh& mesh, SetupTimes* times) {
   // material (time step, masses).
   Model model = build_case_model(c, mesh);
   lap(&SetupTimes::topology);
-  BarCharges bars = build_bar_charges(model, c);
+  const ChargeSpec spec = charge_spec(c);
+  BarCharges bars = build_bar_charges(model, spec);
   const double bar_dt = make_charge_cavities(model, bars);
-  SolidCharges solids = build_solid_charges(model, c);
+  SolidCharges solids = build_solid_charges(model, spec);
   products_leave_contact(model, solids);
   lap(&SetupTimes::charges);
   diagnose_time_step(model, c);

@@ -14,6 +14,7 @@
 #include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/model/model.hpp"
+#include "cdem/physics/applied_loads.hpp"
 #include "cdem/physics/boundaries.hpp"
 #include "cdem/physics/contact.hpp"
 #include "cdem/physics/ties.hpp"
@@ -44,58 +45,6 @@ struct EnergyBalance {
   double mechanical() const { return kinetic + block_strain + spring_strain + contact_strain; }
 };
 
-// Forces applied by extra loads during a step, kept so that their work can be integrated with
-// the mid-step velocity: W += F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt. The half with v(n-1/2) is
-// summed as the loads are added (power_old); the step adds the half with v(n+1/2).
-struct AppliedLoads {
-  std::vector<std::int32_t> node;  // single loads: f on node
-  std::vector<Vec3> force;
-  std::vector<std::int32_t> pair_b, pair_a;  // pair loads: f on pair_b, -f on pair_a
-  std::vector<Vec3> pair_force;
-  double power_old = 0;  // sum of f . v(n-1/2) over the loads added this step
-  void clear() {
-    node.clear();
-    force.clear();
-    pair_b.clear();
-    pair_a.clear();
-    pair_force.clear();
-    power_old = 0;
-  }
-  // Adds f to node n of the model and records it.
-  void add(Model& m, std::int32_t n, Vec3 f) {
-    m.f[n] += f;
-    node.push_back(n);
-    force.push_back(f);
-    power_old += dot(f, m.v[n]);
-  }
-  // Pair loads (a pressure pushing two faces apart: f on pair_b, -f on pair_a, recorded once):
-  // room for n more, filled in parallel (pair_b, pair_a, pair_force from the returned index
-  // on), then applied in order by apply_pairs. The record grows only beyond its capacity.
-  std::size_t append_pairs(std::size_t n) {
-    const std::size_t first = pair_b.size();
-    pair_b.resize(first + n);
-    pair_a.resize(first + n);
-    pair_force.resize(first + n);
-    return first;
-  }
-  // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
-  // (power[i] for load first + i): the forces and power_old summed in the record's order.
-  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t r = first + i;
-      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
-        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
-        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
-      }
-      m.f[pair_b[r]] += pair_force[r];
-      m.f[pair_a[r]] -= pair_force[r];
-      power_old += power[i];
-    }
-  }
-  // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
-  double power_now(const Model& m);
-  std::vector<double> terms;  // power_now's per-load terms (grown once)
-};
 
 // An extra load applied every step after the block and spring forces (the explosive models
 // plug in here): it adds its forces through AppliedLoads at time t.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cdem/physics/integrate.hpp"
+
 namespace cdem {
 
 ReactionMeter::ReactionMeter(const Model& m, const std::vector<BoundaryCondition>& boundaries,
@@ -99,15 +101,9 @@ double ReactionMeter::after_step(const Model& m, double dt, double t_mid) {
         bool any = false;
         for (std::int32_t k = p; k < q; ++k) any = any || constrained_[nodes[k]];
         if (any) {
-          double mass = 0, cm = 0, am = 0;
-          Vec3 f{};
-          for (std::int32_t k = p; k < q; ++k) {
-            const std::int32_t n = nodes[k];
-            mass += m.mass[n];
-            f += m.f[n];
-            if (viscous) cm += m.damping[n] * m.mass[n];
-            if (local) am += m.local_damping[n] * m.mass[n];
-          }
+          const ClusterSums sums = cluster_sums(m, nodes, p, q, viscous, local);
+          const double mass = sums.mass, cm = sums.cm, am = sums.am;
+          Vec3 f = sums.f;
           f += mass * gravity_;
           const Vec3 vfree = free_velocity(v0_of(nodes[p]), f, mass, cm / mass, am / mass, dt);
           const Vec3 vc = constrain(nodes + p, q - p, vfree, mass);

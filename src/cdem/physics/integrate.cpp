@@ -83,8 +83,6 @@ void integrate_clusters(Model& m, const Boundaries& bc, double dt, double t_mid,
   const std::int32_t* off = m.vtx_offset.data();
   const std::int32_t* nodes = m.vtx_nodes.data();
   const std::uint8_t* run = m.vtx_run.data();
-  const double* damping = kViscous ? m.damping.data() : nullptr;
-  const double* local = kLocal ? m.local_damping.data() : nullptr;
   const Vec3 gravity = bc.gravity;
 #pragma omp parallel for schedule(static)
   for (std::int64_t vx = 0; vx < nv; ++vx) {
@@ -93,15 +91,9 @@ void integrate_clusters(Model& m, const Boundaries& bc, double dt, double t_mid,
     for (std::int32_t p = off[vx]; p < o1;) {
       std::int32_t q = p + 1;
       while (q < o1 && !run[q]) ++q;
-      double mass = 0, cm = 0, am = 0;
-      Vec3 f{};
-      for (std::int32_t k = p; k < q; ++k) {
-        const std::int32_t n = nodes[k];
-        mass += m.mass[n];
-        f += m.f[n];
-        if constexpr (kViscous) cm += damping[n] * m.mass[n];
-        if constexpr (kLocal) am += local[n] * m.mass[n];
-      }
+      const ClusterSums sums = cluster_sums(m, nodes, p, q, kViscous, kLocal);
+      const double mass = sums.mass, cm = sums.cm, am = sums.am;
+      Vec3 f = sums.f;
       f += mass * gravity;
       const Vec3 v0 = m.v[nodes[p]];
       Vec3 fd{};

@@ -18,6 +18,28 @@
 
 namespace cdem {
 
+// The sums over one tied cluster's nodes nodes[p..q) (they move as one): its mass, the force on
+// it, and its mass-weighted viscous and local damping coefficients (with `viscous` / `local`
+// false, those stay 0 and their arrays are not read). The cluster integration and the reaction
+// forces (analysis/reactions.cpp) both take them from here, so the reactions are formed from the
+// sums the integration uses, in the same order, bit for bit.
+struct ClusterSums {
+  double mass = 0, cm = 0, am = 0;
+  Vec3 f{};
+};
+inline ClusterSums cluster_sums(const Model& m, const std::int32_t* nodes, std::int32_t p, std::int32_t q,
+                                bool viscous, bool local) {
+  ClusterSums s;
+  for (std::int32_t k = p; k < q; ++k) {
+    const std::int32_t n = nodes[k];
+    s.mass += m.mass[n];
+    s.f += m.f[n];
+    if (viscous) s.cm += m.damping[n] * m.mass[n];
+    if (local) s.am += m.local_damping[n] * m.mass[n];
+  }
+  return s;
+}
+
 void integrate(Model& m, Vec3 gravity, double dt, double* dissipated, double* ke,
                double* cke = nullptr);
 

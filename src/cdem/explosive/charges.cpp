@@ -60,8 +60,8 @@ void block_bbox(const Model& m, std::int32_t b, Vec3& lo, Vec3& hi) {
     }
 }
 
-std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names, const ChargeSpec& c,
-                       const std::string& name) {
+std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names,
+                       const ChargeSpec& c, const std::string& name) {
   for (std::size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return static_cast<std::int32_t>(i);
   names.push_back(name);

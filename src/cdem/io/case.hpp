@@ -33,7 +33,6 @@ struct InitialStress {
   double reference_level = 0;
 };
 
-
 // How intact interfaces act (docs/theory.md "Tied interfaces"): "tied" (the nodes split from a
 // vertex move as one while the points joining them are intact; springs only where the rock has
 // broken) or "springs" (SPEC 1.3 as the method paper: every interface is a spring from t = 0).

@@ -22,13 +22,14 @@ namespace cdem {
 // it, and its mass-weighted viscous and local damping coefficients (with `viscous` / `local`
 // false, those stay 0 and their arrays are not read). The cluster integration and the reaction
 // forces (analysis/reactions.cpp) both take them from here, so the reactions are formed from the
-// sums the integration uses, in the same order, bit for bit.
+// same sums in the same order (to rounding: the two files are compiled alike, but GCC may fuse a
+// product into a multiply-add in one and not in the other).
 struct ClusterSums {
   double mass = 0, cm = 0, am = 0;
   Vec3 f{};
 };
-inline ClusterSums cluster_sums(const Model& m, const std::int32_t* nodes, std::int32_t p, std::int32_t q,
-                                bool viscous, bool local) {
+inline ClusterSums cluster_sums(const Model& m, const std::int32_t* nodes, std::int32_t p,
+                                std::int32_t q, bool viscous, bool local) {
   ClusterSums s;
   for (std::int32_t k = p; k < q; ++k) {
     const std::int32_t n = nodes[k];

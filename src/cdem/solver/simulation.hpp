@@ -45,7 +45,6 @@ struct EnergyBalance {
   double mechanical() const { return kinetic + block_strain + spring_strain + contact_strain; }
 };
 
-
 // An extra load applied every step after the block and spring forces (the explosive models
 // plug in here): it adds its forces through AppliedLoads at time t.
 using LoadHook = std::function<void(Model&, AppliedLoads&, double t)>;

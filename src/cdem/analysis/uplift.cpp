@@ -1,6 +1,7 @@
 #include "cdem/analysis/uplift.hpp"
 
 #include "cdem/analysis/monitors.hpp"
+#include "cdem/core/loop_split.hpp"
 
 namespace cdem {
 
@@ -15,11 +16,17 @@ void UpliftTracker::update(const Model& m) {
   const auto nn = static_cast<std::int64_t>(m.n_nodes());
   const Vec3 up = up_;
   double* mx = max_up_.data();
-#pragma omp parallel for schedule(static)
-  for (std::int64_t n = 0; n < nn; ++n) {
-    const double u = dot(m.x[n] - m.X(static_cast<std::size_t>(n)), up);
-    if (u > mx[n]) mx[n] = u;
+  static LoopSplit split;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split.begin(nn);
+    for (std::int64_t n = part.lo; n < part.hi; ++n) {
+      const double u = dot(m.x[n] - m.X(static_cast<std::size_t>(n)), up);
+      if (u > mx[n]) mx[n] = u;
+    }
+    split.end(part);
   }
+  split.update();
 }
 
 UpliftTracker::Peak UpliftTracker::peak(const Model& m, bool rock_only) const {

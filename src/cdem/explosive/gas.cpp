@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/core/prefetch.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 
@@ -42,6 +43,7 @@ void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>&
   g.iface_fill.assign(m.n_ifaces(), 0.0f);
   g.iface_gas_p.assign(m.n_ifaces(), 0.0f);
   g.iface_body.assign(m.n_ifaces(), -1);
+  g.iface_load.assign(m.n_ifaces(), -1);
   g.block_body.assign(m.n_blocks(), -1);
   g.block_exterior.assign(m.n_blocks(), 0);
   std::vector<int> closed(m.n_blocks(), 0);  // boundary faces of the block in closed sets
@@ -118,14 +120,20 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     g.list_open.resize(nlist);  // (grows with the list of opened interfaces only)
     g.list_aperture.resize(nlist);
     const auto nl = static_cast<std::int64_t>(nlist);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t k = 0; k < nl; ++k) {
-      if (k + kPrefetchAhead < nl) prefetch_ahead(k + kPrefetchAhead, false);
-      const std::size_t i = iface_at(static_cast<std::size_t>(k));
-      const bool o = open(i);
-      g.list_open[k] = o;
-      g.list_aperture[k] = o ? aperture(i) : 0.0;
+    static LoopSplit split_open;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_open.begin(nl);
+      for (std::int64_t k = part.lo; k < part.hi; ++k) {
+        if (k + kPrefetchAhead < nl) prefetch_ahead(k + kPrefetchAhead, false);
+        const std::size_t i = iface_at(static_cast<std::size_t>(k));
+        const bool o = open(i);
+        g.list_open[k] = o;
+        g.list_aperture[k] = o ? aperture(i) : 0.0;
+      }
+      split_open.end(part);
     }
+    split_open.update();
   }
   // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed, the
   // choked flux per density of each body: computed once per body, the same value for all its
@@ -226,17 +234,23 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
   // apertures' array, no longer needed), then the loads in list order
   if (cracks) {
     const auto nl = static_cast<std::int64_t>(nlist);
-#pragma omp parallel for schedule(static)
-    for (std::int64_t k = 0; k < nl; ++k) {
-      const std::size_t i = iface_at(static_cast<std::size_t>(k));
-      const std::int32_t d = g.iface_body[i];
-      double p = 0;
-      if (d >= 0 && g.bodies[d].model == GasModel::Cracks && g.list_open[k] && g.list_aperture[k] > 0)
-        p = g.iface_fill[i] * g.bodies[d].pressure;
-      if (!(p > 0)) p = 0;
-      g.iface_gas_p[i] = static_cast<float>(p);
-      g.list_aperture[k] = p;
+    static LoopSplit split_pressure;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_pressure.begin(nl);
+      for (std::int64_t k = part.lo; k < part.hi; ++k) {
+        const std::size_t i = iface_at(static_cast<std::size_t>(k));
+        const std::int32_t d = g.iface_body[i];
+        double p = 0;
+        if (d >= 0 && g.bodies[d].model == GasModel::Cracks && g.list_open[k] && g.list_aperture[k] > 0)
+          p = g.iface_fill[i] * g.bodies[d].pressure;
+        if (!(p > 0)) p = 0;
+        g.iface_gas_p[i] = static_cast<float>(p);
+        g.list_aperture[k] = p;
+      }
+      split_pressure.end(part);
     }
+    split_pressure.update();
     // the loads: their places in the record in list order (a prefix count), then each
     // interface's loads written and their power terms formed in parallel, then the forces
     // added and the terms summed in list order, serially (the same sums, in the same order, as
@@ -249,24 +263,57 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
     const std::size_t first = out.append_pairs(static_cast<std::size_t>(nload));
     g.load_power.resize(static_cast<std::size_t>(nload));
-#pragma omp parallel for schedule(static)
-    for (std::int64_t k = 0; k < nl; ++k) {
-      if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
-        prefetch_ahead(k + kPrefetchAhead, true);
-      const double p = g.list_aperture[k];
-      if (!(p > 0)) continue;
-      const std::size_t i = iface_at(static_cast<std::size_t>(k));
-      const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
-      for (int q = 0; q < np; ++q) {
-        const auto r = static_cast<std::size_t>(g.load_first[k] + q);
-        const std::int32_t b = m.sp_b[i * np + q], a = m.sp_a[i * np + q];
-        out.pair_b[first + r] = b;
-        out.pair_a[first + r] = a;
-        out.pair_force[first + r] = f;
-        g.load_power[r] = dot(f, m.v[b] - m.v[a]);
+    static LoopSplit split_loads;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_loads.begin(nl);
+      for (std::int64_t k = part.lo; k < part.hi; ++k) {
+        if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
+          prefetch_ahead(k + kPrefetchAhead, true);
+        const double p = g.list_aperture[k];
+        const std::size_t i = iface_at(static_cast<std::size_t>(k));
+        g.iface_load[i] = p > 0 ? static_cast<std::int32_t>(g.load_first[k]) : -1;
+        if (!(p > 0)) continue;
+        const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
+        for (int q = 0; q < np; ++q) {
+          const auto r = static_cast<std::size_t>(g.load_first[k] + q);
+          const std::int32_t b = m.sp_b[i * np + q], a = m.sp_a[i * np + q];
+          out.pair_b[first + r] = b;
+          out.pair_a[first + r] = a;
+          out.pair_force[first + r] = f;
+          g.load_power[r] = dot(f, m.v[b] - m.v[a]);
+        }
       }
+      split_loads.end(part);
     }
-    out.apply_pairs(m, first, static_cast<std::size_t>(nload), g.load_power.data());
+    split_loads.update();
+    // The forces: per block in parallel, each node's loads in the record's order (its
+    // interfaces ascending, as the list), so each node's sum is the one the record applied in
+    // order gives, bit for bit (each node is one block's); then the power terms in order.
+    static LoopSplit split_apply;
+    const auto nbk = static_cast<std::int64_t>(m.n_blocks());
+    const Vec3* const force = out.pair_force.data() + first;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_apply.begin(nbk);
+      for (std::int64_t b = part.lo; b < part.hi; ++b) {
+        if (m.tied && !m.block_active[b]) continue;  // (no opened interface: no crack face)
+        for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+          const std::int32_t code = m.block_iface_list[e];
+          const auto i = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
+          const std::int32_t r = g.iface_load[i];
+          if (r < 0) continue;
+          if (code > 0) {  // the block is A's side: -f
+            for (int q = 0; q < np; ++q) m.f[m.sp_a[i * np + q]] -= force[r + q];
+          } else {
+            for (int q = 0; q < np; ++q) m.f[m.sp_b[i * np + q]] += force[r + q];
+          }
+        }
+      }
+      split_apply.end(part);
+    }
+    split_apply.update();
+    out.book_pair_power(static_cast<std::size_t>(nload), g.load_power.data());
   }
 }
 

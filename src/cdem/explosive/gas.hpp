@@ -87,6 +87,9 @@ struct GasField {
   // power term f . (v_b - v_a), both filled in parallel before the loads are applied in order
   std::vector<std::int64_t> load_first;
   std::vector<double> load_power;
+  // per interface, this step: the index of its first crack-face load among them, -1 for none
+  // (an interface off the list has none: in the tied mode the list only grows)
+  std::vector<std::int32_t> iface_load;
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;

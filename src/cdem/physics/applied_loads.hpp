@@ -58,6 +58,11 @@ struct AppliedLoads {
       power_old += power[i];
     }
   }
+  // What apply_pairs books, for pair loads whose forces the caller has added itself (in an order
+  // that gives each node the same sum): their terms power[0, n) added to power_old in order.
+  void book_pair_power(std::size_t n, const double* power) {
+    for (std::size_t i = 0; i < n; ++i) power_old += power[i];
+  }
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
   double power_now(const Model& m);
   std::vector<double> terms;  // power_now's per-load terms (grown once)

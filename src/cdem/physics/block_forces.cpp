@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/core/polar.hpp"
 #include "cdem/physics/polar_tet.hpp"
 #include "cdem/physics/springs.hpp"
@@ -392,30 +393,38 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
   constexpr int W = kTetChunk;
   const std::int32_t n_chunks = end > begin ? (end - begin + W - 1) / W : 0;
   const bool has_s0 = !m.stress0.empty();
-#pragma omp parallel for schedule(static) reduction(+ : inverted)
-  for (std::int32_t c = 0; c < n_chunks; ++c) {
-    const std::int32_t b0 = begin + c * W;
-    const int n = std::min(W, end - b0);
-    bool inv[W];
-    if (n == W) {
-      if (has_s0)
-        tet_chunk<true, true>(m, b0, n, inv);
-      else
-        tet_chunk<false, true>(m, b0, n, inv);
-    } else {  // the range's last, partial chunk
-      if (has_s0)
-        tet_chunk<true, false>(m, b0, n, inv);
-      else
-        tet_chunk<false, false>(m, b0, n, inv);
-    }
-    for (int l = 0; l < n; ++l) {
-      const std::int32_t b = b0 + l;
-      if (gather_springs) {
-        add_spring_forces(m, b);
+  // (the polar decomposition's iterations and the gather of the opened interfaces' forces cost
+  // more where the rock is broken and turning)
+  static LoopSplit split;
+#pragma omp parallel reduction(+ : inverted)
+  {
+    const LoopSplit::Range r = split.begin(n_chunks);
+    for (auto c = static_cast<std::int32_t>(r.lo); c < r.hi; ++c) {
+      const std::int32_t b0 = begin + c * W;
+      const int n = std::min(W, end - b0);
+      bool inv[W];
+      if (n == W) {
+        if (has_s0)
+          tet_chunk<true, true>(m, b0, n, inv);
+        else
+          tet_chunk<false, true>(m, b0, n, inv);
+      } else {  // the range's last, partial chunk
+        if (has_s0)
+          tet_chunk<true, false>(m, b0, n, inv);
+        else
+          tet_chunk<false, false>(m, b0, n, inv);
       }
-      if (inv[l]) note_inverted(inverted, b, first_inverted);
+      for (int l = 0; l < n; ++l) {
+        const std::int32_t b = b0 + l;
+        if (gather_springs) {
+          add_spring_forces(m, b);
+        }
+        if (inv[l]) note_inverted(inverted, b, first_inverted);
+      }
     }
+    split.end(r);
   }
+  split.update();
   return inverted;
 }
 

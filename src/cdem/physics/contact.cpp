@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/core/prefetch.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 
@@ -64,20 +65,26 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const auto nbk = static_cast<std::int64_t>(m.n_blocks());
     const auto ngrp = static_cast<std::int64_t>(cs.grp_speed.size());
     const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
-#pragma omp parallel for schedule(static) reduction(max : vmax)
-    for (std::int64_t g = 0; g < ngrp; ++g) {
-      double vg = 0;  // (the group's largest speed: the sleep's local clocks, below)
-      for (std::int64_t b = g * kSleepGroup; b < std::min(nbk, (g + 1) * kSleepGroup); ++b) {
-        if (skip && skip[b]) continue;
-        for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
-          const double vn = std::sqrt(dot(m.v[n], m.v[n]));
-          cs.node_drift[n] += vn * dt;
-          vg = std::max(vg, vn);
+    static LoopSplit split_speed;
+#pragma omp parallel reduction(max : vmax)
+    {
+      const LoopSplit::Range part = split_speed.begin(ngrp);
+      for (std::int64_t g = part.lo; g < part.hi; ++g) {
+        double vg = 0;  // (the group's largest speed: the sleep's local clocks, below)
+        for (std::int64_t b = g * kSleepGroup; b < std::min(nbk, (g + 1) * kSleepGroup); ++b) {
+          if (skip && skip[b]) continue;
+          for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+            const double vn = std::sqrt(dot(m.v[n], m.v[n]));
+            cs.node_drift[n] += vn * dt;
+            vg = std::max(vg, vn);
+          }
         }
+        cs.grp_speed[g] = vg;
+        vmax = std::max(vmax, vg);
       }
-      cs.grp_speed[g] = vg;
-      vmax = std::max(vmax, vg);
+      split_speed.end(part);
     }
+    split_speed.update();
   }
   bool due = first_build || cs.rebuild_due;
   if (release_pending) {
@@ -105,12 +112,18 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // were rebuilt (the pairs that stay keep their wakes, contact_broad_phase.cpp).
   {
     const auto ngrp = static_cast<std::int64_t>(cs.grp_clock.size());
-#pragma omp parallel for schedule(static)
-    for (std::int64_t g = 0; g < ngrp; ++g) {
-      double v = 0;
-      for (auto i = cs.grp_nbr_start[g]; i < cs.grp_nbr_start[g + 1]; ++i) v = std::max(v, cs.grp_speed[cs.grp_nbr[i]]);
-      cs.grp_clock[g] += v * dt;
+    static LoopSplit split_clock;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_clock.begin(ngrp);
+      for (std::int64_t g = part.lo; g < part.hi; ++g) {
+        double v = 0;
+        for (auto i = cs.grp_nbr_start[g]; i < cs.grp_nbr_start[g + 1]; ++i) v = std::max(v, cs.grp_speed[cs.grp_nbr[i]]);
+        cs.grp_clock[g] += v * dt;
+      }
+      split_clock.end(part);
     }
+    split_clock.update();
   }
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
   if (npair == 0) {
@@ -135,52 +148,64 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // (the blocks' drift bounds for the sleep, in a loop of their own: in the loop below the
   // compiler would round the geometry differently, and the reject would then differ in the last
   // bit at planes through a node)
-#pragma omp parallel for schedule(static)
-  for (std::int64_t j = 0; j < ncb; ++j) {
-    const std::int32_t n0 = m.block_first_node[cs.cblock[j]];
-    const int nbn = m.block_first_node[cs.cblock[j] + 1] - n0;
-    double dmin = cs.node_drift[n0], dmax = dmin;
-    for (int i = 1; i < nbn; ++i) {
-      dmin = std::min(dmin, cs.node_drift[n0 + i]);
-      dmax = std::max(dmax, cs.node_drift[n0 + i]);
-    }
-    cs.cb_drift[2 * j] = dmin;
-    cs.cb_drift[2 * j + 1] = dmax;
-  }
-#pragma omp parallel for schedule(static)
-  for (std::int64_t j = 0; j < ncb; ++j) {
-    const std::int32_t b = cs.cblock[j], n0 = m.block_first_node[b];
-    const int nbn = m.block_first_node[b + 1] - n0;
-    BlockPlanes& bp = cs.cb_geom[j];
-    Vec3 c{};
-    for (int i = 0; i < nbn; ++i) c += m.x[n0 + i];
-    c *= 1.0 / nbn;
-    double r2 = 0;
-    for (int i = 0; i < nbn; ++i) {
-      const Vec3 d = m.x[n0 + i] - c;
-      r2 = std::max(r2, dot(d, d));
-    }
-    // (a node exactly on a face's plane or an edge, as where aligned blocks land corner on
-    // corner, counts as inside: vibration moves it by ~strain x size either way)
-    bp.tol = 1e-3 * m.block_size[b];
-    const double reach = 1.25 * std::sqrt(r2) + 2 * bp.tol;
-    bp.c = c;
-    bp.reach2 = reach * reach;
-    // the planes of its faces: a point and the outward unit normal
-    const LocalFaces lf = local_faces(m.block_type[b]);
-    bp.nf = lf.count;
-    for (int k = 0; k < lf.count; ++k) {
-      const Vec3 a0 = m.x[n0 + lf.f[k][0]], a1 = m.x[n0 + lf.f[k][1]];
-      bp.a0[k] = a0;
-      if (lf.nodes_per_face == 3) {
-        bp.n[k] = normalized(cross(a1 - a0, m.x[n0 + lf.f[k][2]] - a0));
-      } else {
-        const Vec3 t = a1 - a0;
-        bp.n[k] = normalized(Vec3{t.y, -t.x, 0.0});
+  static LoopSplit split_drift;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split_drift.begin(ncb);
+    for (std::int64_t j = part.lo; j < part.hi; ++j) {
+      const std::int32_t n0 = m.block_first_node[cs.cblock[j]];
+      const int nbn = m.block_first_node[cs.cblock[j] + 1] - n0;
+      double dmin = cs.node_drift[n0], dmax = dmin;
+      for (int i = 1; i < nbn; ++i) {
+        dmin = std::min(dmin, cs.node_drift[n0 + i]);
+        dmax = std::max(dmax, cs.node_drift[n0 + i]);
       }
+      cs.cb_drift[2 * j] = dmin;
+      cs.cb_drift[2 * j + 1] = dmax;
     }
-    bp.rho = simplex_tolerance_reach(m.block_type[b], &m.x[n0], bp.a0, bp.n, bp.tol);
+    split_drift.end(part);
   }
+  split_drift.update();
+  static LoopSplit split_planes;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split_planes.begin(ncb);
+    for (std::int64_t j = part.lo; j < part.hi; ++j) {
+      const std::int32_t b = cs.cblock[j], n0 = m.block_first_node[b];
+      const int nbn = m.block_first_node[b + 1] - n0;
+      BlockPlanes& bp = cs.cb_geom[j];
+      Vec3 c{};
+      for (int i = 0; i < nbn; ++i) c += m.x[n0 + i];
+      c *= 1.0 / nbn;
+      double r2 = 0;
+      for (int i = 0; i < nbn; ++i) {
+        const Vec3 d = m.x[n0 + i] - c;
+        r2 = std::max(r2, dot(d, d));
+      }
+      // (a node exactly on a face's plane or an edge, as where aligned blocks land corner on
+      // corner, counts as inside: vibration moves it by ~strain x size either way)
+      bp.tol = 1e-3 * m.block_size[b];
+      const double reach = 1.25 * std::sqrt(r2) + 2 * bp.tol;
+      bp.c = c;
+      bp.reach2 = reach * reach;
+      // the planes of its faces: a point and the outward unit normal
+      const LocalFaces lf = local_faces(m.block_type[b]);
+      bp.nf = lf.count;
+      for (int k = 0; k < lf.count; ++k) {
+        const Vec3 a0 = m.x[n0 + lf.f[k][0]], a1 = m.x[n0 + lf.f[k][1]];
+        bp.a0[k] = a0;
+        if (lf.nodes_per_face == 3) {
+          bp.n[k] = normalized(cross(a1 - a0, m.x[n0 + lf.f[k][2]] - a0));
+        } else {
+          const Vec3 t = a1 - a0;
+          bp.n[k] = normalized(Vec3{t.y, -t.x, 0.0});
+        }
+      }
+      bp.rho = simplex_tolerance_reach(m.block_type[b], &m.x[n0], bp.a0, bp.n, bp.tol);
+    }
+    split_planes.end(part);
+  }
+  split_planes.update();
   // (a block whose tolerance reach exceeds the cap wakes all its pairs this step;
   // rare: a sliver, a block crushed flat or inverted)
   int over_cap = 0;
@@ -225,11 +250,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   double *const pwake = cs.pair_wake.data(), *const g0 = cs.pair_g0.data();
   std::int32_t* const scratch = cs.near_scratch.data();
   const Vec3* const x_ = m.x.data();
+  static LoopSplit split_near;
 #pragma omp parallel
   {
-    const auto t = static_cast<std::int64_t>(omp_get_thread_num());
-    const auto nt = static_cast<std::int64_t>(omp_get_num_threads());
-    const std::int64_t lo = npair * t / nt, hi = npair * (t + 1) / nt;
+    const LoopSplit::Range part = split_near.begin(npair);
+    const std::int64_t t = part.thread, nt = part.threads;
+    const std::int64_t lo = part.lo, hi = part.hi;
     // 1. The pairs awake this step (most pairs are asleep on their group's clock), listed at the start of
     // the range without a branch: a streaming pass of one byte and one float per pair.
     std::int64_t nawake = 0;
@@ -289,6 +315,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       gwake[p] = wf;
       if (near) scratch[lo + count++] = static_cast<std::int32_t>(p);
     }
+    split_near.end(part);  // (the work, not the wait at the barrier)
     cs.near_count[t + 1] = count;
 #pragma omp atomic
     cs.pair_tests += tests;
@@ -303,133 +330,140 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     // of the few near pairs, not a second pass over all of them)
     std::copy(scratch + lo, scratch + lo + count, cs.near.data() + cs.near_count[t]);
   }
+  split_near.update();
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair
-#pragma omp parallel for schedule(static)
-  for (std::int64_t ii = 0; ii < nnear; ++ii) {
-    if (ii + 2 * kPrefetchAhead < nnear) {
-      const auto q = static_cast<std::size_t>(cs.near[ii + 2 * kPrefetchAhead]);
-      prefetch_at(q, cs.pair_node.data(), cs.pair_block.data(), cs.pair_cb.data(), cs.pair_kf.data());
-      prefetch_for_write_at(q, cs.pair_g.data(), cs.pair_n.data(), cs.pair_kf_now.data(), cs.pair_off.data(),
-                            cs.pair_margin.data(), cs.pair_score.data(), cs.pair_w.data());
-    }
-    if (ii + kPrefetchAhead < nnear) {
-      const std::int32_t q = cs.near[ii + kPrefetchAhead], bq = cs.pair_block[q];
-      prefetch_at(static_cast<std::size_t>(cs.pair_node[q]), m.x.data(), m.v.data());
-      prefetch_at(static_cast<std::size_t>(m.block_first_node[bq]), m.v.data(), m.x.data());
-      prefetch_object(cs.cb_geom[cs.pair_cb[q]]);
-    }
-    const std::int32_t p = cs.near[ii];
-    const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
-    const Vec3 x = m.x[n];
-    // The node against every face of the block: inside when behind all of them; the contact
-    // face is the nearest candidate face (largest g, the first of equals).
-    const LocalFaces lf = local_faces(m.block_type[b]);
-    const std::int32_t n0 = m.block_first_node[b];
-    const BlockPlanes& bp = cs.cb_geom[cs.pair_cb[p]];
-    const double tol = bp.tol;
-    bool inside = true;
-    double margin = std::numeric_limits<double>::infinity();
-    double gk_all[4];
-    Vec3 nk_all[4];
-    double gprev[4], approach[4];
-    for (int k = 0; k < lf.count; ++k) {
-      // (the face plane of the step's block geometry: the same expressions, rounded as written
-      // without multiply-add contraction, so the same bits as computing it here again)
-      const Vec3 a0 = bp.a0[k], nk = bp.n[k];
-      Vec3 vf = m.v[n0 + lf.f[k][0]] + m.v[n0 + lf.f[k][1]];
-      if (lf.nodes_per_face == 3)
-        vf = (1.0 / 3) * (vf + m.v[n0 + lf.f[k][2]]);
-      else
-        vf = 0.5 * vf;
-      const double gk = dot(x - a0, nk);
-      gk_all[k] = gk;
-      nk_all[k] = nk;
-      approach[k] = -dot(m.v[n] - vf, nk);        // how fast the node moves into the plane
-      gprev[k] = gk + dt * approach[k];           // the gap a step ago (relative motion)
-      inside = inside && gk <= tol;
-      margin = std::min(margin, -gk);
-    }
-    // The contact face: the one the node is in contact with since an earlier step while it is
-    // still behind it; else, of the candidate faces it is behind or on (within tol), the one with
-    // the largest gap a step ago: the face it came in by (at an edge or a corner, not the one it
-    // happens to be nearest to), and a node on a face's plane, in front of it, is not in contact
-    // through the far side; else the nearest candidate face. In contact when behind that face.
-    int kf = -1;
-    const int kp = cs.pair_kf[p];
-    if (kp >= 0 && kp < lf.count && cs.face_cand[4 * b + kp] && gk_all[kp] < 0) kf = kp;
-    if (kf < 0) {  // behind or on (within tol) the plane: the face with the largest gap a step ago
-      double best = -std::numeric_limits<double>::infinity();
-      for (int k = 0; k < lf.count; ++k)
-        if (cs.face_cand[4 * b + k] && gk_all[k] < tol && gprev[k] > best) best = gprev[k];
-      // Faces whose gap a step ago is within tol of the largest are all ones the node may have
-      // come in by (it was on their planes, within tol): of these, the one it moves into the
-      // fastest. A node slowly sinking at a block's corner or edge lies on the side faces'
-      // planes (g = 0 to rounding) while a step ago it was already a little behind the top face:
-      // by the gap alone a side face won, the contact pushed sideways with no depth, and the
-      // node sank unheld (the aligned stack of test_contact.cpp, corners on corners, whichever
-      // way its last bits fell).
-      double fastest = -std::numeric_limits<double>::infinity();
-      for (int k = 0; k < lf.count; ++k)
-        if (cs.face_cand[4 * b + k] && gk_all[k] < tol && gprev[k] >= best - tol && approach[k] > fastest)
-          fastest = approach[k], kf = k;
-    }
-    if (kf < 0) {
-      double best = -std::numeric_limits<double>::infinity();
-      for (int k = 0; k < lf.count; ++k)
-        if (cs.face_cand[4 * b + k] && gk_all[k] > best) best = gk_all[k], kf = k;
-    }
-    const double g = kf >= 0 ? gk_all[kf] : -std::numeric_limits<double>::infinity();
-    const Vec3 nrm = kf >= 0 ? nk_all[kf] : Vec3{};
-    // weights of the block's nodes: the projection onto face kf, barycentric, clamped; `lowest`
-    // the smallest coordinate before clamping (< 0: the projection falls outside the face)
-    std::array<double, 4> w{0, 0, 0, 0};
-    double lowest = 1.0;
-    if (kf >= 0) {
-      const int c = lf.nodes_per_face;
-      const std::array<int, 3>& fl = lf.f[kf];
-      const Vec3 p0 = m.x[n0 + fl[0]];
-      double wf[3] = {0, 0, 0};
-      if (c == 3) {
-        const Vec3 e1 = m.x[n0 + fl[1]] - p0, e2 = m.x[n0 + fl[2]] - p0, v2 = x - g * nrm - p0;
-        const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
-        const double d20 = dot(v2, e1), d21 = dot(v2, e2), den = d00 * d11 - d01 * d01;
-        wf[1] = den > 0 ? (d11 * d20 - d01 * d21) / den : 1.0 / 3;
-        wf[2] = den > 0 ? (d00 * d21 - d01 * d20) / den : 1.0 / 3;
-        wf[0] = 1.0 - wf[1] - wf[2];
-      } else {
-        const Vec3 t = m.x[n0 + fl[1]] - p0;
-        const double l2 = dot(t, t);
-        wf[1] = l2 > 0 ? dot(x - p0, t) / l2 : 0.5;
-        wf[0] = 1.0 - wf[1];
+  static LoopSplit split_geom;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split_geom.begin(nnear);
+    for (std::int64_t ii = part.lo; ii < part.hi; ++ii) {
+      if (ii + 2 * kPrefetchAhead < nnear) {
+        const auto q = static_cast<std::size_t>(cs.near[ii + 2 * kPrefetchAhead]);
+        prefetch_at(q, cs.pair_node.data(), cs.pair_block.data(), cs.pair_cb.data(), cs.pair_kf.data());
+        prefetch_for_write_at(q, cs.pair_g.data(), cs.pair_n.data(), cs.pair_kf_now.data(), cs.pair_off.data(),
+                              cs.pair_margin.data(), cs.pair_score.data(), cs.pair_w.data());
       }
-      double sum = 0;
-      for (int i = 0; i < c; ++i) lowest = std::min(lowest, wf[i]);
-      for (int i = 0; i < c; ++i) sum += (wf[i] = std::max(0.0, wf[i]));
-      for (int i = 0; i < c; ++i) w[fl[i]] = sum > 0 ? wf[i] / sum : 1.0 / c;
+      if (ii + kPrefetchAhead < nnear) {
+        const std::int32_t q = cs.near[ii + kPrefetchAhead], bq = cs.pair_block[q];
+        prefetch_at(static_cast<std::size_t>(cs.pair_node[q]), m.x.data(), m.v.data());
+        prefetch_at(static_cast<std::size_t>(m.block_first_node[bq]), m.v.data(), m.x.data());
+        prefetch_object(cs.cb_geom[cs.pair_cb[q]]);
+      }
+      const std::int32_t p = cs.near[ii];
+      const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+      const Vec3 x = m.x[n];
+      // The node against every face of the block: inside when behind all of them; the contact
+      // face is the nearest candidate face (largest g, the first of equals).
+      const LocalFaces lf = local_faces(m.block_type[b]);
+      const std::int32_t n0 = m.block_first_node[b];
+      const BlockPlanes& bp = cs.cb_geom[cs.pair_cb[p]];
+      const double tol = bp.tol;
+      bool inside = true;
+      double margin = std::numeric_limits<double>::infinity();
+      double gk_all[4];
+      Vec3 nk_all[4];
+      double gprev[4], approach[4];
+      for (int k = 0; k < lf.count; ++k) {
+        // (the face plane of the step's block geometry: the same expressions, rounded as written
+        // without multiply-add contraction, so the same bits as computing it here again)
+        const Vec3 a0 = bp.a0[k], nk = bp.n[k];
+        Vec3 vf = m.v[n0 + lf.f[k][0]] + m.v[n0 + lf.f[k][1]];
+        if (lf.nodes_per_face == 3)
+          vf = (1.0 / 3) * (vf + m.v[n0 + lf.f[k][2]]);
+        else
+          vf = 0.5 * vf;
+        const double gk = dot(x - a0, nk);
+        gk_all[k] = gk;
+        nk_all[k] = nk;
+        approach[k] = -dot(m.v[n] - vf, nk);        // how fast the node moves into the plane
+        gprev[k] = gk + dt * approach[k];           // the gap a step ago (relative motion)
+        inside = inside && gk <= tol;
+        margin = std::min(margin, -gk);
+      }
+      // The contact face: the one the node is in contact with since an earlier step while it is
+      // still behind it; else, of the candidate faces it is behind or on (within tol), the one with
+      // the largest gap a step ago: the face it came in by (at an edge or a corner, not the one it
+      // happens to be nearest to), and a node on a face's plane, in front of it, is not in contact
+      // through the far side; else the nearest candidate face. In contact when behind that face.
+      int kf = -1;
+      const int kp = cs.pair_kf[p];
+      if (kp >= 0 && kp < lf.count && cs.face_cand[4 * b + kp] && gk_all[kp] < 0) kf = kp;
+      if (kf < 0) {  // behind or on (within tol) the plane: the face with the largest gap a step ago
+        double best = -std::numeric_limits<double>::infinity();
+        for (int k = 0; k < lf.count; ++k)
+          if (cs.face_cand[4 * b + k] && gk_all[k] < tol && gprev[k] > best) best = gprev[k];
+        // Faces whose gap a step ago is within tol of the largest are all ones the node may have
+        // come in by (it was on their planes, within tol): of these, the one it moves into the
+        // fastest. A node slowly sinking at a block's corner or edge lies on the side faces'
+        // planes (g = 0 to rounding) while a step ago it was already a little behind the top face:
+        // by the gap alone a side face won, the contact pushed sideways with no depth, and the
+        // node sank unheld (the aligned stack of test_contact.cpp, corners on corners, whichever
+        // way its last bits fell).
+        double fastest = -std::numeric_limits<double>::infinity();
+        for (int k = 0; k < lf.count; ++k)
+          if (cs.face_cand[4 * b + k] && gk_all[k] < tol && gprev[k] >= best - tol && approach[k] > fastest)
+            fastest = approach[k], kf = k;
+      }
+      if (kf < 0) {
+        double best = -std::numeric_limits<double>::infinity();
+        for (int k = 0; k < lf.count; ++k)
+          if (cs.face_cand[4 * b + k] && gk_all[k] > best) best = gk_all[k], kf = k;
+      }
+      const double g = kf >= 0 ? gk_all[kf] : -std::numeric_limits<double>::infinity();
+      const Vec3 nrm = kf >= 0 ? nk_all[kf] : Vec3{};
+      // weights of the block's nodes: the projection onto face kf, barycentric, clamped; `lowest`
+      // the smallest coordinate before clamping (< 0: the projection falls outside the face)
+      std::array<double, 4> w{0, 0, 0, 0};
+      double lowest = 1.0;
+      if (kf >= 0) {
+        const int c = lf.nodes_per_face;
+        const std::array<int, 3>& fl = lf.f[kf];
+        const Vec3 p0 = m.x[n0 + fl[0]];
+        double wf[3] = {0, 0, 0};
+        if (c == 3) {
+          const Vec3 e1 = m.x[n0 + fl[1]] - p0, e2 = m.x[n0 + fl[2]] - p0, v2 = x - g * nrm - p0;
+          const double d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+          const double d20 = dot(v2, e1), d21 = dot(v2, e2), den = d00 * d11 - d01 * d01;
+          wf[1] = den > 0 ? (d11 * d20 - d01 * d21) / den : 1.0 / 3;
+          wf[2] = den > 0 ? (d00 * d21 - d01 * d20) / den : 1.0 / 3;
+          wf[0] = 1.0 - wf[1] - wf[2];
+        } else {
+          const Vec3 t = m.x[n0 + fl[1]] - p0;
+          const double l2 = dot(t, t);
+          wf[1] = l2 > 0 ? dot(x - p0, t) / l2 : 0.5;
+          wf[0] = 1.0 - wf[1];
+        }
+        double sum = 0;
+        for (int i = 0; i < c; ++i) lowest = std::min(lowest, wf[i]);
+        for (int i = 0; i < c; ++i) sum += (wf[i] = std::max(0.0, wf[i]));
+        for (int i = 0; i < c; ++i) w[fl[i]] = sum > 0 ? wf[i] / sum : 1.0 / c;
+      }
+      // A node whose projection falls far outside its contact face is not penetrating through
+      // that face: it is inside a distorted quad whose face lines no longer bound it, or it slid
+      // past the end of the face that held it. Its depth to the face's line is then no measure of
+      // an overlap, and the reaction at the clamped point does not match it: such pairs made
+      // energy from nothing (-9.3 MJ/m by 1.9 ms in the SPEC 5.1 bar demo, from 156 pair-steps
+      // at up to 6 face lengths outside a quad of the ring around the hole;
+      // docs/verification_contact.md). The pair keeps the contact but without force: its depth is
+      // ignored (d0, in (c)) while it is off the face, its stored energy booked as dissipated.
+      const bool off_face = lowest < -kOffFace;
+      cs.pair_g[p] = g;
+      cs.pair_n[p] = nrm;
+      cs.pair_kf_now[p] = static_cast<std::int8_t>(kf);
+      // the pair's claim on the body's contact: a holder (in contact through the same face since
+      // the last step) first, else the crossed face's gap a step ago; -inf: not penetrating
+      const bool pen = inside && kf >= 0 && g < 0;
+      cs.pair_off[p] = off_face;
+      cs.pair_margin[p] = !inside ? -1.0 : (pen ? 1.0 : 0.0);
+      cs.pair_score[p] = !pen ? -std::numeric_limits<double>::infinity()
+                              : (kp >= 0 && kf == kp ? std::numeric_limits<double>::max() : gprev[kf]);
+      (void)margin;
+      cs.pair_w[p] = w;
     }
-    // A node whose projection falls far outside its contact face is not penetrating through
-    // that face: it is inside a distorted quad whose face lines no longer bound it, or it slid
-    // past the end of the face that held it. Its depth to the face's line is then no measure of
-    // an overlap, and the reaction at the clamped point does not match it: such pairs made
-    // energy from nothing (-9.3 MJ/m by 1.9 ms in the SPEC 5.1 bar demo, from 156 pair-steps
-    // at up to 6 face lengths outside a quad of the ring around the hole;
-    // docs/verification_contact.md). The pair keeps the contact but without force: its depth is
-    // ignored (d0, in (c)) while it is off the face, its stored energy booked as dissipated.
-    const bool off_face = lowest < -kOffFace;
-    cs.pair_g[p] = g;
-    cs.pair_n[p] = nrm;
-    cs.pair_kf_now[p] = static_cast<std::int8_t>(kf);
-    // the pair's claim on the body's contact: a holder (in contact through the same face since
-    // the last step) first, else the crossed face's gap a step ago; -inf: not penetrating
-    const bool pen = inside && kf >= 0 && g < 0;
-    cs.pair_off[p] = off_face;
-    cs.pair_margin[p] = !inside ? -1.0 : (pen ? 1.0 : 0.0);
-    cs.pair_score[p] = !pen ? -std::numeric_limits<double>::infinity()
-                            : (kp >= 0 && kf == kp ? std::numeric_limits<double>::max() : gprev[kf]);
-    (void)margin;
-    cs.pair_w[p] = w;
+    split_geom.end(part);
   }
+  split_geom.update();
   // (b) per node, per body: one block keeps the contact: the one that held it through the same
   // face since the last step, else the one whose face the node crossed (largest gap a step ago),
   // the first of equals
@@ -441,135 +475,147 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         cs.near_group.push_back(static_cast<std::int32_t>(i));
     cs.near_group.push_back(static_cast<std::int32_t>(nnear));
     const auto nd = static_cast<std::int64_t>(cs.near_group.size()) - 1;
-#pragma omp parallel for schedule(static)
-    for (std::int64_t d = 0; d < nd; ++d) {
-      const auto i0 = cs.near_group[d], i1 = cs.near_group[d + 1];
-      for (auto ip = i0; ip < i1; ++ip) {
-        const std::int32_t p = cs.near[ip];
-        if (cs.pair_margin[p] < 1.0) continue;  // not penetrating
-        for (auto iq = i0; iq < i1; ++iq) {
-          const std::int32_t q = cs.near[iq];
-          if (q == p || cs.pair_margin[q] < 1.0) continue;
-          if (cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
-          const bool q_wins = cs.pair_score[q] > cs.pair_score[p] ||
-                              (cs.pair_score[q] == cs.pair_score[p] && q < p);
-          if (q_wins) {
-            cs.pair_margin[p] = 0.5;  // penetrating, but another block of the body has the contact
-            break;
+    static LoopSplit split_owner;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_owner.begin(nd);
+      for (std::int64_t d = part.lo; d < part.hi; ++d) {
+        const auto i0 = cs.near_group[d], i1 = cs.near_group[d + 1];
+        for (auto ip = i0; ip < i1; ++ip) {
+          const std::int32_t p = cs.near[ip];
+          if (cs.pair_margin[p] < 1.0) continue;  // not penetrating
+          for (auto iq = i0; iq < i1; ++iq) {
+            const std::int32_t q = cs.near[iq];
+            if (q == p || cs.pair_margin[q] < 1.0) continue;
+            if (cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
+            const bool q_wins = cs.pair_score[q] > cs.pair_score[p] ||
+                                (cs.pair_score[q] == cs.pair_score[p] && q < p);
+            if (q_wins) {
+              cs.pair_margin[p] = 0.5;  // penetrating, but another block of the body has the contact
+              break;
+            }
+          }
+        }
+        // The contact of a body moves with the node from block to block: the winner takes over
+        // the state (tangential force, gap, ignored depth, last force) of the pair that held it,
+        // so the force and the stored energy carry on without a jump.
+        for (auto ip = i0; ip < i1; ++ip) {
+          const std::int32_t p = cs.near[ip];
+          if (cs.pair_margin[p] < 1.0) continue;  // p: the winner of its body
+          for (auto iq = i0; iq < i1; ++iq) {
+            const std::int32_t q = cs.near[iq];
+            if (q == p || cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
+            if (cs.pair_gap[q] == 0 && cs.pair_fn[q] == 0 && dot(cs.pair_force[q], cs.pair_force[q]) == 0)
+              continue;  // q held nothing
+            cs.pair_ft[p] = cs.pair_ft[q];
+            cs.pair_gap[p] = cs.pair_gap[q];
+            // The depth in p's block beyond q's penetration is ignored (d0), so the penetration,
+            // the force's magnitude and the stored energy carry on. (With q's d0 instead, a node
+            // deeper in p's block than in q's got the difference pushed back at once: energy from
+            // nothing, -1.2 MJ by 3 ms in the coarse SPEC 5.3 cylinder, docs/verification.md.)
+            cs.pair_g0[p] = std::max(0.0, -cs.pair_g[p] - cs.pair_gap[q]);
+            cs.pair_fn[p] = cs.pair_fn[q];
+            cs.pair_force[p] = cs.pair_force[q];
+            cs.pair_kf[p] = cs.pair_kf_now[p];  // p holds it from now on
+            cs.pair_kf[q] = -1;
+            cs.pair_ft[q] = {};
+            cs.pair_gap[q] = 0;
+            cs.pair_g0[q] = 0;
+            cs.pair_fn[q] = 0;
+            cs.pair_force[q] = {};
           }
         }
       }
-      // The contact of a body moves with the node from block to block: the winner takes over
-      // the state (tangential force, gap, ignored depth, last force) of the pair that held it,
-      // so the force and the stored energy carry on without a jump.
-      for (auto ip = i0; ip < i1; ++ip) {
-        const std::int32_t p = cs.near[ip];
-        if (cs.pair_margin[p] < 1.0) continue;  // p: the winner of its body
-        for (auto iq = i0; iq < i1; ++iq) {
-          const std::int32_t q = cs.near[iq];
-          if (q == p || cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
-          if (cs.pair_gap[q] == 0 && cs.pair_fn[q] == 0 && dot(cs.pair_force[q], cs.pair_force[q]) == 0)
-            continue;  // q held nothing
-          cs.pair_ft[p] = cs.pair_ft[q];
-          cs.pair_gap[p] = cs.pair_gap[q];
-          // The depth in p's block beyond q's penetration is ignored (d0), so the penetration,
-          // the force's magnitude and the stored energy carry on. (With q's d0 instead, a node
-          // deeper in p's block than in q's got the difference pushed back at once: energy from
-          // nothing, -1.2 MJ by 3 ms in the coarse SPEC 5.3 cylinder, docs/verification.md.)
-          cs.pair_g0[p] = std::max(0.0, -cs.pair_g[p] - cs.pair_gap[q]);
-          cs.pair_fn[p] = cs.pair_fn[q];
-          cs.pair_force[p] = cs.pair_force[q];
-          cs.pair_kf[p] = cs.pair_kf_now[p];  // p holds it from now on
-          cs.pair_kf[q] = -1;
-          cs.pair_ft[q] = {};
-          cs.pair_gap[q] = 0;
-          cs.pair_g0[q] = 0;
-          cs.pair_fn[q] = 0;
-          cs.pair_force[q] = {};
-        }
-      }
+      split_owner.end(part);
     }
+    split_owner.update();
   }
   // (c) forces and state of the near pairs
-#pragma omp parallel for schedule(static) reduction(+ : active) reduction(max : pen_ratio)
-  for (std::int64_t ii = 0; ii < nnear; ++ii) {
-    if (ii + kPrefetchAhead < nnear) {
-      const auto q = static_cast<std::size_t>(cs.near[ii + kPrefetchAhead]);
-      prefetch_at(q, cs.pair_w.data(), cs.pair_g.data(), cs.pair_n.data(), cs.pair_margin.data(),
-                  cs.pair_k.data(), cs.pair_kf_now.data());
-      prefetch_for_write_at(q, cs.pair_force.data(), cs.pair_gap.data(), cs.pair_ft.data(), cs.pair_g0.data(),
-                            cs.pair_kf.data(), cs.pair_diss.data(), cs.pair_fn.data());
+  static LoopSplit split_force;
+#pragma omp parallel reduction(+ : active) reduction(max : pen_ratio)
+  {
+    const LoopSplit::Range part = split_force.begin(nnear);
+    for (std::int64_t ii = part.lo; ii < part.hi; ++ii) {
+      if (ii + kPrefetchAhead < nnear) {
+        const auto q = static_cast<std::size_t>(cs.near[ii + kPrefetchAhead]);
+        prefetch_at(q, cs.pair_w.data(), cs.pair_g.data(), cs.pair_n.data(), cs.pair_margin.data(),
+                    cs.pair_k.data(), cs.pair_kf_now.data());
+        prefetch_for_write_at(q, cs.pair_force.data(), cs.pair_gap.data(), cs.pair_ft.data(), cs.pair_g0.data(),
+                              cs.pair_kf.data(), cs.pair_diss.data(), cs.pair_fn.data());
+      }
+      const std::int32_t p = cs.near[ii];
+      const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+      const std::int32_t n0 = m.block_first_node[b];
+      const std::array<double, 4>& w = cs.pair_w[p];
+      const double g = cs.pair_g[p];
+      const Vec3 nrm = cs.pair_n[p];
+      const bool inside = cs.pair_margin[p] >= 0;   // inside the block (whether it won or not)
+      const bool kf_ok = cs.pair_margin[p] >= 1.0;  // penetrating, with the contact of the body
+      const int nb_nodes = m.block_first_node[b + 1] - n0;
+      Vec3 vrel = m.v[n];
+      for (int i = 0; i < nb_nodes; ++i) vrel -= w[i] * m.v[n0 + i];
+      const Vec3 du = dt * vrel;
+      const double k = cs.pair_k[p], kt = cs.shear_ratio * k;
+      const Vec3 f_old = cs.pair_force[p];
+      const double e_old = 0.5 * k * cs.pair_gap[p] * cs.pair_gap[p] +
+                           (kt > 0 ? 0.5 * dot(cs.pair_ft[p], cs.pair_ft[p]) / kt : 0.0);
+      const bool in_contact = kf_ok && g < 0;
+      const double vn_rel = dot(vrel, nrm);
+      // The ignored penetration d0: set when the node comes inside, then only shrinking.
+      double d0 = cs.pair_g0[p];
+      // coming into contact now (not in contact at the last step): an overlap beyond what one
+      // step's approach explains is inherited (the node sank in while it was held by a broken
+      // point, or through faces that were not yet candidates), not pushed back at once
+      if (in_contact && cs.pair_kf[p] < 0) d0 = std::max(0.0, -g - 2.0 * std::abs(vn_rel) * dt);
+      if (in_contact) d0 = std::min(d0, -g);
+      // off its face (above): the whole depth is ignored, the contact kept without force, so that
+      // when the node comes back over the face its force grows from zero (dropping the contact and
+      // taking it up again as a new one pushed the last two steps' approach back at once, each time:
+      // a pump that made 75 MJ from nothing in the coarse SPEC 5.3 cylinder by 13 ms)
+      if (in_contact && cs.pair_off[p]) d0 = -g;
+      if (!inside) d0 = 0;
+      cs.pair_g0[p] = d0;
+      Vec3 force{}, ft{};
+      double fn = 0, gap = 0;
+      if (in_contact && k > 0 && -g > d0) {
+        gap = -g - d0;
+        const double mu = cs.mu[static_cast<std::size_t>(m.block_region[m.node_block(n)]) * cs.nreg +
+                                m.block_region[b]];
+        const double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * m.mass[n]) : 0.0;
+        fn = std::max(0.0, k * gap - cdamp * vn_rel);
+        // tangential spring in the current tangent plane (magnitude kept), Coulomb cap
+        ft = cs.pair_ft[p];
+        const double ft2 = dot(ft, ft);
+        ft -= dot(ft, nrm) * nrm;
+        const double fp2 = dot(ft, ft);
+        if (fp2 > 0) ft *= std::sqrt(ft2 / fp2);
+        const Vec3 du_t = du - dot(du, nrm) * nrm;
+        ft -= kt * du_t;
+        // the tangential dashpot of the same damping ratio (DEM practice: both directions damped)
+        const Vec3 ft_total = zeta > 0 ? ft - (2.0 * zeta * std::sqrt(kt * m.mass[n]) / dt) * du_t : ft;
+        const double cap = mu * fn;
+        double mag = norm(ft);
+        if (mag > cap) ft *= (cap > 0 ? cap / mag : 0.0);
+        Vec3 fdrag = ft_total;
+        mag = norm(fdrag);
+        if (mag > cap) fdrag *= (cap > 0 ? cap / mag : 0.0);
+        force = fn * nrm + fdrag;
+        ++active;
+        pen_ratio = std::max(pen_ratio, gap / m.block_size[b]);  // (the ignored part not counted)
+      }
+      const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
+      // work done on the contact by the relative motion: -F . du (F acts on the node)
+      const double dd_ = -0.5 * dot(f_old + force, du) - (e_new - e_old);
+      cs.pair_diss[p] += dd_;
+      cs.pair_fn[p] = fn;
+      cs.pair_ft[p] = ft;
+      cs.pair_gap[p] = gap;
+      cs.pair_force[p] = force;
+      cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
     }
-    const std::int32_t p = cs.near[ii];
-    const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
-    const std::int32_t n0 = m.block_first_node[b];
-    const std::array<double, 4>& w = cs.pair_w[p];
-    const double g = cs.pair_g[p];
-    const Vec3 nrm = cs.pair_n[p];
-    const bool inside = cs.pair_margin[p] >= 0;   // inside the block (whether it won or not)
-    const bool kf_ok = cs.pair_margin[p] >= 1.0;  // penetrating, with the contact of the body
-    const int nb_nodes = m.block_first_node[b + 1] - n0;
-    Vec3 vrel = m.v[n];
-    for (int i = 0; i < nb_nodes; ++i) vrel -= w[i] * m.v[n0 + i];
-    const Vec3 du = dt * vrel;
-    const double k = cs.pair_k[p], kt = cs.shear_ratio * k;
-    const Vec3 f_old = cs.pair_force[p];
-    const double e_old = 0.5 * k * cs.pair_gap[p] * cs.pair_gap[p] +
-                         (kt > 0 ? 0.5 * dot(cs.pair_ft[p], cs.pair_ft[p]) / kt : 0.0);
-    const bool in_contact = kf_ok && g < 0;
-    const double vn_rel = dot(vrel, nrm);
-    // The ignored penetration d0: set when the node comes inside, then only shrinking.
-    double d0 = cs.pair_g0[p];
-    // coming into contact now (not in contact at the last step): an overlap beyond what one
-    // step's approach explains is inherited (the node sank in while it was held by a broken
-    // point, or through faces that were not yet candidates), not pushed back at once
-    if (in_contact && cs.pair_kf[p] < 0) d0 = std::max(0.0, -g - 2.0 * std::abs(vn_rel) * dt);
-    if (in_contact) d0 = std::min(d0, -g);
-    // off its face (above): the whole depth is ignored, the contact kept without force, so that
-    // when the node comes back over the face its force grows from zero (dropping the contact and
-    // taking it up again as a new one pushed the last two steps' approach back at once, each time:
-    // a pump that made 75 MJ from nothing in the coarse SPEC 5.3 cylinder by 13 ms)
-    if (in_contact && cs.pair_off[p]) d0 = -g;
-    if (!inside) d0 = 0;
-    cs.pair_g0[p] = d0;
-    Vec3 force{}, ft{};
-    double fn = 0, gap = 0;
-    if (in_contact && k > 0 && -g > d0) {
-      gap = -g - d0;
-      const double mu = cs.mu[static_cast<std::size_t>(m.block_region[m.node_block(n)]) * cs.nreg +
-                              m.block_region[b]];
-      const double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * m.mass[n]) : 0.0;
-      fn = std::max(0.0, k * gap - cdamp * vn_rel);
-      // tangential spring in the current tangent plane (magnitude kept), Coulomb cap
-      ft = cs.pair_ft[p];
-      const double ft2 = dot(ft, ft);
-      ft -= dot(ft, nrm) * nrm;
-      const double fp2 = dot(ft, ft);
-      if (fp2 > 0) ft *= std::sqrt(ft2 / fp2);
-      const Vec3 du_t = du - dot(du, nrm) * nrm;
-      ft -= kt * du_t;
-      // the tangential dashpot of the same damping ratio (DEM practice: both directions damped)
-      const Vec3 ft_total = zeta > 0 ? ft - (2.0 * zeta * std::sqrt(kt * m.mass[n]) / dt) * du_t : ft;
-      const double cap = mu * fn;
-      double mag = norm(ft);
-      if (mag > cap) ft *= (cap > 0 ? cap / mag : 0.0);
-      Vec3 fdrag = ft_total;
-      mag = norm(fdrag);
-      if (mag > cap) fdrag *= (cap > 0 ? cap / mag : 0.0);
-      force = fn * nrm + fdrag;
-      ++active;
-      pen_ratio = std::max(pen_ratio, gap / m.block_size[b]);  // (the ignored part not counted)
-    }
-    const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
-    // work done on the contact by the relative motion: -F . du (F acts on the node)
-    const double dd_ = -0.5 * dot(f_old + force, du) - (e_new - e_old);
-    cs.pair_diss[p] += dd_;
-    cs.pair_fn[p] = fn;
-    cs.pair_ft[p] = ft;
-    cs.pair_gap[p] = gap;
-    cs.pair_force[p] = force;
-    cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
+    split_force.end(part);
   }
+  split_force.update();
   // (c') edge-to-edge contacts (3D), their forces added to f first, in their list's order
   if (cs.edges) edge_contact_forces(m, cs, dt, active, pen_ratio);
   cs.active = active;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/physics/boundaries.hpp"
 
 namespace cdem {
@@ -84,60 +85,68 @@ void integrate_clusters(Model& m, const Boundaries& bc, double dt, double t_mid,
   const std::int32_t* nodes = m.vtx_nodes.data();
   const std::uint8_t* run = m.vtx_run.data();
   const Vec3 gravity = bc.gravity;
-#pragma omp parallel for schedule(static)
-  for (std::int64_t vx = 0; vx < nv; ++vx) {
-    double ke_v = 0, cke_v = 0, diss_v = 0, react_v = 0, react_after_v = 0;
-    const std::int32_t o1 = off[vx + 1];
-    for (std::int32_t p = off[vx]; p < o1;) {
-      std::int32_t q = p + 1;
-      while (q < o1 && !run[q]) ++q;
-      const ClusterSums sums = cluster_sums(m, nodes, p, q, kViscous, kLocal);
-      const double mass = sums.mass, cm = sums.cm, am = sums.am;
-      Vec3 f = sums.f;
-      f += mass * gravity;
-      const Vec3 v0 = m.v[nodes[p]];
-      Vec3 fd{};
-      if constexpr (kLocal) {
-        const double al = am / mass;
-        if (al > 0) {
-          for (int c = 0; c < 3; ++c)
-            fd[c] = -al * std::abs(f[c]) * (v0[c] > 0 ? 1.0 : (v0[c] < 0 ? -1.0 : 0.0));
-          f += fd;
+  // (a vertex inside the rock has some twenty nodes, one on its surface a few; a broken vertex's
+  // nodes are clusters of their own: the cost per vertex varies along the model)
+  static LoopSplit split;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split.begin(nv);
+    for (std::int64_t vx = part.lo; vx < part.hi; ++vx) {
+      double ke_v = 0, cke_v = 0, diss_v = 0, react_v = 0, react_after_v = 0;
+      const std::int32_t o1 = off[vx + 1];
+      for (std::int32_t p = off[vx]; p < o1;) {
+        std::int32_t q = p + 1;
+        while (q < o1 && !run[q]) ++q;
+        const ClusterSums sums = cluster_sums(m, nodes, p, q, kViscous, kLocal);
+        const double mass = sums.mass, cm = sums.cm, am = sums.am;
+        Vec3 f = sums.f;
+        f += mass * gravity;
+        const Vec3 v0 = m.v[nodes[p]];
+        Vec3 fd{};
+        if constexpr (kLocal) {
+          const double al = am / mass;
+          if (al > 0) {
+            for (int c = 0; c < 3; ++c)
+              fd[c] = -al * std::abs(f[c]) * (v0[c] > 0 ? 1.0 : (v0[c] < 0 ? -1.0 : 0.0));
+            f += fd;
+          }
         }
+        Vec3 v1;
+        double c = 0;
+        if constexpr (kViscous) {
+          c = cm / mass;
+          const double cdt = 0.5 * c * dt;
+          v1 = ((1.0 - cdt) * v0 + (dt / mass) * f) / (1.0 + cdt);
+        } else {
+          v1 = v0 + (dt / mass) * f;
+        }
+        if (vtx_con && vtx_con[vx]) {
+          const Vec3 vfree = v1;
+          for (std::int32_t k = p; k < q; ++k) v1 = constrain_velocity(bc, nodes[k], v1, t_mid);
+          const Vec3 r = (mass / dt) * (v1 - vfree);
+          react_v += dot(r, 0.5 * (v0 + v1)) * dt;
+          react_after_v += 0.5 * dt * dot(r, v1);
+        }
+        for (std::int32_t k = p; k < q; ++k) m.v[nodes[k]] = v1;
+        const Vec3 vmid = 0.5 * (v0 + v1);
+        if constexpr (kViscous || kLocal) diss_v += dt * (c * mass * dot(vmid, vmid) - dot(fd, vmid));
+        if (ke) {
+          ke_v += 0.5 * mass * dot(v0, v1);  // the leapfrog invariant's, as integrate_blocks
+          if constexpr (kViscous || kLocal) cke_v += 0.5 * dt * dot(c * mass * vmid - fd, v1);
+        }
+        p = q;
       }
-      Vec3 v1;
-      double c = 0;
-      if constexpr (kViscous) {
-        c = cm / mass;
-        const double cdt = 0.5 * c * dt;
-        v1 = ((1.0 - cdt) * v0 + (dt / mass) * f) / (1.0 + cdt);
-      } else {
-        v1 = v0 + (dt / mass) * f;
-      }
-      if (vtx_con && vtx_con[vx]) {
-        const Vec3 vfree = v1;
-        for (std::int32_t k = p; k < q; ++k) v1 = constrain_velocity(bc, nodes[k], v1, t_mid);
-        const Vec3 r = (mass / dt) * (v1 - vfree);
-        react_v += dot(r, 0.5 * (v0 + v1)) * dt;
-        react_after_v += 0.5 * dt * dot(r, v1);
-      }
-      for (std::int32_t k = p; k < q; ++k) m.v[nodes[k]] = v1;
-      const Vec3 vmid = 0.5 * (v0 + v1);
-      if constexpr (kViscous || kLocal) diss_v += dt * (c * mass * dot(vmid, vmid) - dot(fd, vmid));
+      if constexpr (kViscous || kLocal) dissipated[vx] += diss_v;
       if (ke) {
-        ke_v += 0.5 * mass * dot(v0, v1);  // the leapfrog invariant's, as integrate_blocks
-        if constexpr (kViscous || kLocal) cke_v += 0.5 * dt * dot(c * mass * vmid - fd, v1);
+        ke[vx] = ke_v;
+        if (cke) cke[vx] = cke_v;
       }
-      p = q;
+      reaction[2 * vx] = react_v;
+      reaction[2 * vx + 1] = react_after_v;
     }
-    if constexpr (kViscous || kLocal) dissipated[vx] += diss_v;
-    if (ke) {
-      ke[vx] = ke_v;
-      if (cke) cke[vx] = cke_v;
-    }
-    reaction[2 * vx] = react_v;
-    reaction[2 * vx + 1] = react_after_v;
+    split.end(part);
   }
+  split.update();
 }
 
 }  // namespace

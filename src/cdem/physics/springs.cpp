@@ -5,6 +5,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 
 namespace cdem {
@@ -592,12 +593,18 @@ void spring_forces_chunked(Model& m, double dt, double t, std::int64_t lo, std::
   const std::int64_t nc = ni > lo ? (ni - lo + kChunk - 1) / kChunk : 0;
   const bool fe = !m.sp_w.empty();
   std::int64_t released = 0;
-#pragma omp parallel for schedule(static) reduction(+ : released)
-  for (std::int64_t c = 0; c < nc; ++c) {
-    const std::int64_t i0 = lo + c * kChunk;
-    released += spring_chunk<NP, kG0, kList>(
-        m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe, list);
+  static LoopSplit split;  // (the chunks of opened, softening points cost several elastic ones)
+#pragma omp parallel reduction(+ : released)
+  {
+    const LoopSplit::Range r = split.begin(nc);
+    for (std::int64_t c = r.lo; c < r.hi; ++c) {
+      const std::int64_t i0 = lo + c * kChunk;
+      released += spring_chunk<NP, kG0, kList>(
+          m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe, list);
+    }
+    split.end(r);
   }
+  split.update();
   m.released_points += released;
   if (kList) m.iface_normal_set = true;
 }
@@ -695,8 +702,14 @@ void spring_forces_reference(Model& m, double dt, double t) {
 
 void gather_spring_forces(Model& m) {
   const auto nb = static_cast<std::int32_t>(m.n_blocks());
-#pragma omp parallel for schedule(static)
-  for (std::int32_t b = 0; b < nb; ++b) add_spring_forces(m, b);
+  static LoopSplit split;  // (the blocks with active interfaces gather, the others do not)
+#pragma omp parallel
+  {
+    const LoopSplit::Range r = split.begin(nb);
+    for (auto b = static_cast<std::int32_t>(r.lo); b < r.hi; ++b) add_spring_forces(m, b);
+    split.end(r);
+  }
+  split.update();
 }
 
 void release_unused_spring_state(Model& m) {

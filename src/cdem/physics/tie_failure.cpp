@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cdem/core/loop_split.hpp"
 #include "cdem/mesh/element_geometry.hpp"
 #include "cdem/physics/ties.hpp"
 
@@ -69,50 +70,56 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
   const int np = m.springs_per_iface;
   if (flag.size() != static_cast<std::size_t>(ni)) flag.assign(ni, 0);
   std::int64_t failed = 0;
-#pragma omp parallel for schedule(static) reduction(+ : failed)
-  for (std::int64_t i = 0; i < ni; ++i) {
-    if (!m.iface_check[i]) continue;
-    // Quick reject from the stresses alone: |t| = |sigma n| <= ||sigma||_F for any unit n, and a
-    // tie can only break if t_n >= f_t or |t_s| >= c - t_n tan(phi) >= c - |t| tan(phi), so
-    // never while ||sigma||_F < min(f_t, c / (1 + tan(phi))) (tie_reject_stress). Most ties,
-    // away from the wave fronts, stop here without gathering their face.
-    {
-      const Sym6& sa = m.stress[m.iface_block_a[i]];
-      const Sym6& sb = m.stress[m.iface_block_b[i]];
-      double f2 = 0;
-      for (int k = 0; k < 6; ++k) {
-        const double v = 0.5 * (sa[k] + sb[k]);
-        f2 += (k < 3 ? 1.0 : 2.0) * v * v;
+  static LoopSplit split;
+#pragma omp parallel reduction(+ : failed)
+  {
+    const LoopSplit::Range part = split.begin(ni);
+    for (std::int64_t i = part.lo; i < part.hi; ++i) {
+      if (!m.iface_check[i]) continue;
+      // Quick reject from the stresses alone: |t| = |sigma n| <= ||sigma||_F for any unit n, and a
+      // tie can only break if t_n >= f_t or |t_s| >= c - t_n tan(phi) >= c - |t| tan(phi), so
+      // never while ||sigma||_F < min(f_t, c / (1 + tan(phi))) (tie_reject_stress). Most ties,
+      // away from the wave fronts, stop here without gathering their face.
+      {
+        const Sym6& sa = m.stress[m.iface_block_a[i]];
+        const Sym6& sb = m.stress[m.iface_block_b[i]];
+        double f2 = 0;
+        for (int k = 0; k < 6; ++k) {
+          const double v = 0.5 * (sa[k] + sb[k]);
+          f2 += (k < 3 ? 1.0 : 2.0) * v * v;
+        }
+        const double thr = m.tie_reject[m.iface_material[i]];
+        if (f2 < thr * thr) {
+          flag[i] = kModeNone;
+          continue;
+        }
       }
-      const double thr = m.tie_reject[m.iface_material[i]];
-      if (f2 < thr * thr) {
-        flag[i] = kModeNone;
-        continue;
+      // The traction on the face of A (a tied face's nodes coincide with B's) from its area vector
+      // a, without a square root: t_n = (sigma a . a) / (a . a), |t_s|^2 = |sigma a|^2 / (a . a) - t_n^2.
+      const std::int64_t s0 = i * np;
+      const Vec3 p0 = m.x[m.sp_a[s0]], p1 = m.x[m.sp_a[s0 + 1]];
+      Vec3 a;
+      if (np == 3) {
+        a = cross(p1 - p0, m.x[m.sp_a[s0 + 2]] - p0);
+      } else {
+        const Vec3 e = p1 - p0;
+        a = {e.y, -e.x, 0.0};
       }
+      const Vec3 ta = mean_traction(m, i, a);
+      const double aa = dot(a, a);
+      if (!(aa > 0)) continue;
+      const double inv = 1.0 / aa;
+      const double tn = dot(ta, a) * inv;
+      const double ts2 = std::max(0.0, dot(ta, ta) * inv - tn * tn);
+      const double area = m.sp_area.v[i];
+      const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+      const std::uint8_t mode = tie_strength_exceeded(law, tn * area, ts2 * area * area, area);
+      flag[i] = mode;
+      failed += mode != kModeNone;
     }
-    // The traction on the face of A (a tied face's nodes coincide with B's) from its area vector
-    // a, without a square root: t_n = (sigma a . a) / (a . a), |t_s|^2 = |sigma a|^2 / (a . a) - t_n^2.
-    const std::int64_t s0 = i * np;
-    const Vec3 p0 = m.x[m.sp_a[s0]], p1 = m.x[m.sp_a[s0 + 1]];
-    Vec3 a;
-    if (np == 3) {
-      a = cross(p1 - p0, m.x[m.sp_a[s0 + 2]] - p0);
-    } else {
-      const Vec3 e = p1 - p0;
-      a = {e.y, -e.x, 0.0};
-    }
-    const Vec3 ta = mean_traction(m, i, a);
-    const double aa = dot(a, a);
-    if (!(aa > 0)) continue;
-    const double inv = 1.0 / aa;
-    const double tn = dot(ta, a) * inv;
-    const double ts2 = std::max(0.0, dot(ta, ta) * inv - tn * tn);
-    const double area = m.sp_area.v[i];
-    const SpringLaw& law = m.spring_laws[m.iface_material[i]];
-    const std::uint8_t mode = tie_strength_exceeded(law, tn * area, ts2 * area * area, area);
-    flag[i] = mode;
-    failed += mode != kModeNone;
+    split.end(part);
   }
+  split.update();
   if (failed == 0) return 0.0;
   double insertion = 0;
   for (std::int64_t i = 0; i < ni; ++i) {

@@ -1,6 +1,7 @@
 #include "cdem/explosive/gas.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "cdem/core/loop_split.hpp"
@@ -147,48 +148,106 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       const double rho = mgas / vol;
       g.front_speed[k] = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
     }
+    // (a) In parallel, the interfaces whose gas body is known: the fill of the crack front and
+    // each one's terms of its body's crack volume and vent area. What an interface does here
+    // reads nothing another writes in this pass (the bodies, front speeds and block sizes are
+    // fixed during it).
+    // (b) Serially, in list order: the interfaces still without a body (they take it from their
+    // blocks, which the fronts completed before them in the list have just reached), the
+    // blocks reached by a completed front, and the sums. The same operations in the same order
+    // as one serial pass: bitwise the same for any thread count.
+    auto body_of = [&](std::int32_t d) -> const GasBody* {
+      const GasBody& gs = g.bodies[d];
+      return gs.model == GasModel::Cracks ? &gs : nullptr;
+    };
+    // the fill of interface i of body d (ba, bb its blocks), and whether it completed now
+    auto advance_fill = [&](std::size_t i, std::int32_t d, std::int32_t ba, std::int32_t bb) {
+      const GasBody& gs = g.bodies[d];
+      const double mgas = gs.gas_mass(), vol = gs.volume();
+      if (!(g.iface_fill[i] < 1.0f && mgas > 0 && vol > 0)) return false;
+      const double c = g.front_speed[d];
+      const double lc = 0.5 * (m.block_size[ba] + m.block_size[bb]);
+      const double f = std::min(1.0, g.iface_fill[i] + dt * c / lc);
+      g.iface_fill[i] = static_cast<float>(f);
+      return f >= 1.0;
+    };
+    // the terms of an interface with aperture w > 0: fill x area (x w into the volume) and
+    // its vent width (x w into the vent area; 0 when it does not vent)
+    auto terms = [&](std::size_t i, std::int32_t ba, std::int32_t bb, std::size_t k) {
+      const double area = np * m.sp_area.v[i];
+      g.list_fill_area[k] = g.iface_fill[i] * area;
+      g.list_vent[k] = g.iface_fill[i] >= 1.0f && (g.block_exterior[ba] || g.block_exterior[bb])
+                           ? (m.dim == 3 ? std::sqrt(area) : 1.0)
+                           : 0.0;
+    };
+    enum : std::uint8_t { kSkip = 0, kTerms = 1, kReached = 2, kSerial = 4 };
+    g.list_state.resize(nlist);  // (grows with the list of opened interfaces only)
+    g.list_body.resize(nlist);
+    g.list_fill_area.resize(nlist);
+    g.list_vent.resize(nlist);
+    static LoopSplit split_fill;
+    const auto nl = static_cast<std::int64_t>(nlist);
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_fill.begin(nl);
+      for (std::int64_t k = part.lo; k < part.hi; ++k) {
+        // (the interface's own data 2 x kPrefetchAhead entries ahead, its blocks' kPrefetchAhead)
+        if (k + 2 * kPrefetchAhead < nl) {
+          const std::size_t ia = iface_at(static_cast<std::size_t>(k + 2 * kPrefetchAhead));
+          prefetch_at(ia, m.iface_block_a.data(), m.iface_block_b.data(), g.iface_body.data(), m.sp_area.v.data());
+          prefetch_for_write_at(ia, g.iface_fill.data());
+        }
+        if (k + kPrefetchAhead < nl) {
+          const std::size_t ia = iface_at(static_cast<std::size_t>(k + kPrefetchAhead));
+          for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
+            prefetch_at(static_cast<std::size_t>(blk), g.block_exterior.data(), m.block_size.data());
+        }
+        std::uint8_t st = kSkip;
+        if (g.list_open[k]) {
+          const std::size_t i = iface_at(static_cast<std::size_t>(k));
+          const std::int32_t d = g.iface_body[i];
+          if (d < 0) {
+            st = kSerial;
+          } else if (body_of(d)) {
+            const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
+            if (advance_fill(i, d, ba, bb)) st |= kReached;
+            if (g.list_aperture[k] > 0) {
+              terms(i, ba, bb, static_cast<std::size_t>(k));
+              st |= kTerms;
+            }
+            g.list_body[k] = d;
+          }
+        }
+        g.list_state[k] = st;
+      }
+      split_fill.end(part);
+    }
+    split_fill.update();
     for (std::size_t k = 0; k < nlist; ++k) {
-      // (the interface's own data 2 x kPrefetchAhead entries ahead, its blocks' kPrefetchAhead)
-      if (k + 2 * kPrefetchAhead < nlist) {
-        const std::size_t ia = iface_at(k + 2 * kPrefetchAhead);
-        prefetch_at(ia, m.iface_block_a.data(), m.iface_block_b.data(), g.iface_body.data(), m.sp_area.v.data());
-        prefetch_for_write_at(ia, g.iface_fill.data());
-      }
-      if (k + kPrefetchAhead < nlist) {
-        const std::size_t ia = iface_at(k + kPrefetchAhead);
-        for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
-          prefetch_at(static_cast<std::size_t>(blk), g.block_body.data(), g.block_exterior.data(),
-                      m.block_size.data());
-      }
-      if (!g.list_open[k]) continue;
-      const std::size_t i = iface_at(k);
-      const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
-      std::int32_t d = g.iface_body[i];
+      std::uint8_t st = g.list_state[k];
+      if (st == kSkip) continue;
       const double w = g.list_aperture[k];
-      if (d < 0) {
+      std::int32_t d = g.list_body[k];
+      if (st & kSerial) {
+        const std::size_t i = iface_at(k);
+        const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
         const std::int32_t da = g.block_body[ba], db = g.block_body[bb];
         d = da >= 0 ? da : db;
-        if (d < 0 || g.bodies[d].model != GasModel::Cracks || !(w > 0)) continue;
+        if (d < 0 || !body_of(d) || !(w > 0)) continue;
         g.iface_body[i] = d;
+        st = advance_fill(i, d, ba, bb) ? kReached : kSkip;
+        terms(i, ba, bb, k);
+        st |= kTerms;
       }
-      const GasBody& gs = g.bodies[d];
-      if (gs.model != GasModel::Cracks) continue;
-      const double mgas = gs.gas_mass(), vol = gs.volume();
-      if (g.iface_fill[i] < 1.0f && mgas > 0 && vol > 0) {
-        const double c = g.front_speed[d];
-        const double lc = 0.5 * (m.block_size[ba] + m.block_size[bb]);
-        const double f = std::min(1.0, g.iface_fill[i] + dt * c / lc);
-        g.iface_fill[i] = static_cast<float>(f);
-        if (f >= 1.0) {
-          if (g.block_body[ba] < 0) g.block_body[ba] = d;
-          if (g.block_body[bb] < 0) g.block_body[bb] = d;
-        }
+      if (st & kReached) {
+        const std::size_t i = iface_at(k);
+        const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
+        if (g.block_body[ba] < 0) g.block_body[ba] = d;
+        if (g.block_body[bb] < 0) g.block_body[bb] = d;
       }
-      if (w > 0) {
-        const double area = np * m.sp_area.v[i];
-        g.scratch[2 * d] += g.iface_fill[i] * area * w;
-        if (g.iface_fill[i] >= 1.0f && (g.block_exterior[ba] || g.block_exterior[bb]))
-          g.scratch[2 * d + 1] += w * (m.dim == 3 ? std::sqrt(area) : 1.0);
+      if (st & kTerms) {
+        g.scratch[2 * d] += g.list_fill_area[k] * w;
+        if (g.list_vent[k] != 0) g.scratch[2 * d + 1] += w * g.list_vent[k];
       }
     }
   }
@@ -287,9 +346,11 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       split_loads.end(part);
     }
     split_loads.update();
-    // The forces: per block in parallel, each node's loads in the record's order (its
-    // interfaces ascending, as the list), so each node's sum is the one the record applied in
-    // order gives, bit for bit (each node is one block's); then the power terms in order.
+    // The forces: per block in parallel, each node's loads in the record's order (its block's
+    // loaded interfaces sorted by their places in the record: the list is ascending but for the
+    // interfaces opened since the step began, at its end), so each node's sum is the one the
+    // record applied in order gives, bit for bit (each node is one block's); then the power
+    // terms in order.
     static LoopSplit split_apply;
     const auto nbk = static_cast<std::int64_t>(m.n_blocks());
     const Vec3* const force = out.pair_force.data() + first;
@@ -298,11 +359,18 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       const LoopSplit::Range part = split_apply.begin(nbk);
       for (std::int64_t b = part.lo; b < part.hi; ++b) {
         if (m.tied && !m.block_active[b]) continue;  // (no opened interface: no crack face)
-        for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+        // its loaded interfaces (a block has at most 4 faces): record place, side code
+        std::array<std::pair<std::int32_t, std::int32_t>, 4> mine;
+        int nmine = 0;
+        for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1] && nmine < 4; ++e) {
           const std::int32_t code = m.block_iface_list[e];
+          const std::int32_t r = g.iface_load[static_cast<std::size_t>((code > 0 ? code : -code) - 1)];
+          if (r >= 0) mine[nmine++] = {r, code};
+        }
+        std::sort(mine.begin(), mine.begin() + nmine);
+        for (int j = 0; j < nmine; ++j) {
+          const auto [r, code] = mine[j];
           const auto i = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
-          const std::int32_t r = g.iface_load[i];
-          if (r < 0) continue;
           if (code > 0) {  // the block is A's side: -f
             for (int q = 0; q < np; ++q) m.f[m.sp_a[i * np + q]] -= force[r + q];
           } else {

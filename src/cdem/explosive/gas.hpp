@@ -83,6 +83,11 @@ struct GasField {
   std::vector<std::uint8_t> list_open;
   std::vector<double> list_aperture;  // (then, in the face-load pass, each one's gas pressure)
   std::vector<double> front_speed;    // this step, per body: the crack front's speed (m/s)
+  // this step, per interface of the list, from the parallel part of the crack pass: what the
+  // serial part does with it (bits), its body, its fill x area and its vent width (update_gas)
+  std::vector<std::uint8_t> list_state;
+  std::vector<std::int32_t> list_body;
+  std::vector<double> list_fill_area, list_vent;
   // this step, the crack-face loads: per list entry its first load (prefix count), per load its
   // power term f . (v_b - v_a), both filled in parallel before the loads are applied in order
   std::vector<std::int64_t> load_first;

@@ -621,19 +621,27 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   cs.active = active;
   cs.active_max = std::max(cs.active_max, active);
   cs.max_pen_ratio = std::max(cs.max_pen_ratio, pen_ratio);
-  // Gathers in a fixed order, serial (the forces of the few pairs in contact), each node's sum
-  // formed first and then added: node side, then face side, each in pair order, so the sums are
-  // the same for any thread count.
+  // Gathers in a fixed order, each node's sum formed first and then added: node side, then face
+  // side, each in pair order, so the sums are the same for any thread count. The node side in
+  // parallel (a node's near pairs are one run of the list), the face side serially (the forces
+  // of the few pairs in contact, scattered over the blocks' nodes).
   const auto ng = static_cast<std::int64_t>(cs.near_group.size()) - 1;
-  for (std::int64_t d = 0; d < ng; ++d) {
-    Vec3 acc{};
-    bool any = false;
-    for (auto i = cs.near_group[d]; i < cs.near_group[d + 1]; ++i) {
-      const Vec3 F = cs.pair_force[cs.near[i]];
-      if (F.x != 0 || F.y != 0 || F.z != 0) acc += F, any = true;
+  static LoopSplit split_gather;
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split_gather.begin(ng);
+    for (std::int64_t d = part.lo; d < part.hi; ++d) {
+      Vec3 acc{};
+      bool any = false;
+      for (auto i = cs.near_group[d]; i < cs.near_group[d + 1]; ++i) {
+        const Vec3 F = cs.pair_force[cs.near[i]];
+        if (F.x != 0 || F.y != 0 || F.z != 0) acc += F, any = true;
+      }
+      if (any) m.f[cs.pair_node[cs.near[cs.near_group[d]]]] += acc;
     }
-    if (any) m.f[cs.pair_node[cs.near[cs.near_group[d]]]] += acc;
+    split_gather.end(part);
   }
+  split_gather.update();
   cs.face_touched.clear();
   cs.face_sum.clear();
   for (std::int64_t i = 0; i < nnear; ++i) {

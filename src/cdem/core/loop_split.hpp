@@ -80,9 +80,7 @@ class LoopSplit {
     if (!(total > kMinSeconds * nt)) return;
     // the cost's cumulative sum at each cut, and each cut's target: where the piecewise linear
     // sum reaches k / nt of the total (a thread's range of width 0 keeps it)
-    std::array<double, kMaxThreads + 1> target{};
-    target[0] = 0;
-    target[nt] = 1;
+    std::array<double, kMaxThreads + 1> target{};  // (1 to nt - 1: cuts 0 and nt stay 0 and 1)
     int seg = 0;
     double before = 0;  // the cost below cut_[seg]
     for (int k = 1; k < nt; ++k) {

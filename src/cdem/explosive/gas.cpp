@@ -347,10 +347,9 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
     split_loads.update();
     // The forces: per block in parallel, each node's loads in the record's order (its block's
-    // loaded interfaces sorted by their places in the record: the list is ascending but for the
-    // interfaces opened since the step began, at its end), so each node's sum is the one the
-    // record applied in order gives, bit for bit (each node is one block's); then the power
-    // terms in order.
+    // loaded interfaces sorted by their places in the record, whatever the list's order), so
+    // each node's sum is the one adding the record in order gives, bit for bit (each node is
+    // one block's); then the power terms in order.
     static LoopSplit split_apply;
     const auto nbk = static_cast<std::int64_t>(m.n_blocks());
     const Vec3* const force = out.pair_force.data() + first;

@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "cdem/core/prefetch.hpp"
 #include "cdem/model/model.hpp"
 
 namespace cdem {
@@ -36,7 +35,8 @@ struct AppliedLoads {
   }
   // Pair loads (a pressure pushing two faces apart: f on pair_b, -f on pair_a, recorded once):
   // room for n more, filled in parallel (pair_b, pair_a, pair_force from the returned index
-  // on), then applied in order by apply_pairs. The record grows only beyond its capacity.
+  // on); the caller adds their forces and books their power (book_pair_power). The record grows
+  // only beyond its capacity.
   std::size_t append_pairs(std::size_t n) {
     const std::size_t first = pair_b.size();
     pair_b.resize(first + n);
@@ -44,22 +44,8 @@ struct AppliedLoads {
     pair_force.resize(first + n);
     return first;
   }
-  // Applies the pair loads [first, first + n) in order, with their terms f . (v_b - v_a) given
-  // (power[i] for load first + i): the forces and power_old summed in the record's order.
-  void apply_pairs(Model& m, std::size_t first, std::size_t n, const double* power) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t r = first + i;
-      if (i + kPrefetchAhead < n) {  // (the loads' nodes are scattered: each force a cache line)
-        prefetch_for_write_at(static_cast<std::size_t>(pair_b[r + kPrefetchAhead]), m.f.data());
-        prefetch_for_write_at(static_cast<std::size_t>(pair_a[r + kPrefetchAhead]), m.f.data());
-      }
-      m.f[pair_b[r]] += pair_force[r];
-      m.f[pair_a[r]] -= pair_force[r];
-      power_old += power[i];
-    }
-  }
-  // What apply_pairs books, for pair loads whose forces the caller has added itself (in an order
-  // that gives each node the same sum): their terms power[0, n) added to power_old in order.
+  // Books the pair loads' power terms power[0, n) into power_old, in record order. The caller
+  // adds their forces itself, each node's in record order (update_gas: per block, in parallel).
   void book_pair_power(std::size_t n, const double* power) {
     for (std::size_t i = 0; i < n; ++i) power_old += power[i];
   }

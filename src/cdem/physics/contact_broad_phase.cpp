@@ -174,6 +174,19 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
       const double g = cs.half_skin[cand_block[j]] + pad;
       for_cells(lo[j] - Vec3{g, g, g}, hi[j] + Vec3{g, g, g}, fn);
     };
+    // (what the node search below reads of each candidate block, in one cache line per block:
+    // the box, the half skin, the block, its released flag; the same values as in the arrays
+    // above, so the same tests, bit for bit. Read from four arrays, one of them through the
+    // block's index, the test of a box cost several cache misses: most of the rebuild's time)
+    struct alignas(64) CandBox {
+      Vec3 lo, hi;
+      double half_skin;
+      std::int32_t block;
+      std::uint8_t released;
+    };
+    std::vector<CandBox> box(nf);
+    for (std::size_t j = 0; j < nf; ++j)
+      box[j] = {lo[j], hi[j], cs.half_skin[cand_block[j]], cand_block[j], cand_released[j]};
     cs.bucket_offset.assign(tsize + 1, 0);
     for (std::size_t j = 0; j < nf; ++j) block_cells(j, [&](std::uint64_t h) { ++cs.bucket_offset[h + 1]; });
     for (std::size_t h = 0; h < tsize; ++h) cs.bucket_offset[h + 1] += cs.bucket_offset[h];
@@ -206,14 +219,14 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
         near_blocks.clear();
         for_cells(x - Vec3{sn, sn, sn}, x + Vec3{sn, sn, sn}, [&](std::uint64_t h) {
           for (auto e = cs.bucket_offset[h]; e < cs.bucket_offset[h + 1]; ++e) {
-            const auto j = static_cast<std::size_t>(cs.bucket_entry[e]);
-            const std::int32_t bf = cand_block[j];
-            const double g = cs.half_skin[bf] + sn;
+            const CandBox& cb = box[static_cast<std::size_t>(cs.bucket_entry[e])];
+            const std::int32_t bf = cb.block;
+            const double g = cb.half_skin + sn;
             bool inside = true;
-            for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= lo[j][d] - g && x[d] <= hi[j][d] + g;
+            for (int d = 0; d < cs.dim; ++d) inside = inside && x[d] >= cb.lo[d] - g && x[d] <= cb.hi[d] + g;
             if (!inside) continue;
             if (bf == bn) continue;
-            const bool released = cs.on_released[n] || cand_released[j];
+            const bool released = cs.on_released[n] || cb.released;
             if (cs.body[bf] == cs.body[bn] && !released) continue;
             near_blocks.push_back(bf);
           }
@@ -272,22 +285,29 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
     }
     while (o < nold) drop(o++);
   }
-  carry_monotone(cs.pair_fn, cs.pair_from, 0.0);
-  carry_monotone(cs.pair_diss, cs.pair_from, 0.0);
-  carry_monotone(cs.pair_gap, cs.pair_from, 0.0);
-  carry_monotone(cs.pair_g0, cs.pair_from, 0.0);
-  carry_monotone(cs.pair_ft, cs.pair_from, Vec3{});
-  carry_monotone(cs.pair_force, cs.pair_from, Vec3{});
-  carry_monotone(cs.pair_kf, cs.pair_from, std::int8_t{-1});
-  carry_monotone(cs.pair_wake, cs.pair_from, 0.0);   // (a new pair is tested at the next step)
-  carry_monotone(cs.pair_gwake, cs.pair_from, 0.0f);
-  cs.pair_k.resize(npair);
-  // The pair's stiffness: the smallest of the node's and the block nodes' budgets.
-  for (std::size_t p = 0; p < npair; ++p) {
-    const std::int32_t b = cs.pair_block[p];
-    double k = cs.kc[cs.pair_node[p]];
-    for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) k = std::min(k, cs.kc[qn]);
-    cs.pair_k[p] = k;
+  // (each array on its own: one task each, in parallel; then the pairs' stiffness, the smallest
+  // of the node's and the block nodes' budgets)
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int task = 0; task < 10; ++task) {
+    switch (task) {
+      case 0: carry_monotone(cs.pair_fn, cs.pair_from, 0.0); break;
+      case 1: carry_monotone(cs.pair_diss, cs.pair_from, 0.0); break;
+      case 2: carry_monotone(cs.pair_gap, cs.pair_from, 0.0); break;
+      case 3: carry_monotone(cs.pair_g0, cs.pair_from, 0.0); break;
+      case 4: carry_monotone(cs.pair_ft, cs.pair_from, Vec3{}); break;
+      case 5: carry_monotone(cs.pair_force, cs.pair_from, Vec3{}); break;
+      case 6: carry_monotone(cs.pair_kf, cs.pair_from, std::int8_t{-1}); break;
+      case 7: carry_monotone(cs.pair_wake, cs.pair_from, 0.0); break;  // (a new pair: tested next step)
+      case 8: carry_monotone(cs.pair_gwake, cs.pair_from, 0.0f); break;
+      default:
+        cs.pair_k.resize(npair);
+        for (std::size_t p = 0; p < npair; ++p) {
+          const std::int32_t b = cs.pair_block[p];
+          double k = cs.kc[cs.pair_node[p]];
+          for (auto qn = m.block_first_node[b]; qn < m.block_first_node[b + 1]; ++qn) k = std::min(k, cs.kc[qn]);
+          cs.pair_k[p] = k;
+        }
+    }
   }
   // 7. The lists derived from the pairs.
   index_pairs(m, cs);

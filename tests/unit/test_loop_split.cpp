@@ -136,5 +136,34 @@ TEST(LoopSplit, InAParallelRegion) {
   }
 }
 
+TEST(LoopSplit, RunAndRunReduce) {
+  // The one-call forms: run visits each index once; run_reduce joins the threads' counts and
+  // maxima into the exact totals, for 1 to 3 threads and loops shorter than the thread count.
+  LoopSplit s;
+  const int before = omp_get_max_threads();
+  for (const std::int64_t n : {std::int64_t{0}, std::int64_t{1}, std::int64_t{2}, std::int64_t{100000}}) {
+    std::vector<int> seen(static_cast<std::size_t>(n));
+    for (int threads : {1, 2, 3, 2}) {
+      omp_set_num_threads(threads);
+      std::fill(seen.begin(), seen.end(), 0);
+      s.run(n, [&](const LoopSplit::Range& r) {
+        for (std::int64_t i = r.lo; i < r.hi; ++i) ++seen[static_cast<std::size_t>(i)];
+      });
+      for (std::int64_t i = 0; i < n; ++i) ASSERT_EQ(seen[static_cast<std::size_t>(i)], 1) << "n " << n << ", index " << i;
+      const LoopSplit::CountMax cm = s.run_reduce(n, LoopSplit::CountMax{}, [&](const LoopSplit::Range& r) {
+        LoopSplit::CountMax c;
+        for (std::int64_t i = r.lo; i < r.hi; ++i) {
+          c.count += i % 3 == 0;
+          c.max = std::max(c.max, static_cast<double>(i % 1000) * 0.5);
+        }
+        return c;
+      }, LoopSplit::CountMax::join);
+      EXPECT_EQ(cm.count, (n + 2) / 3);
+      EXPECT_EQ(cm.max, n == 0 ? 0.0 : static_cast<double>(std::min<std::int64_t>(n - 1, 999)) * 0.5);
+    }
+  }
+  omp_set_num_threads(before);
+}
+
 }  // namespace
 }  // namespace cdem

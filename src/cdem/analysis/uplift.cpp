@@ -17,16 +17,12 @@ void UpliftTracker::update(const Model& m) {
   const Vec3 up = up_;
   double* mx = max_up_.data();
   static LoopSplit split;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split.begin(nn);
+  split.run(nn, [&](const LoopSplit::Range& part) {
     for (std::int64_t n = part.lo; n < part.hi; ++n) {
       const double u = dot(m.x[n] - m.X(static_cast<std::size_t>(n)), up);
       if (u > mx[n]) mx[n] = u;
     }
-    split.end(part);
-  }
-  split.update();
+  });
 }
 
 UpliftTracker::Peak UpliftTracker::peak(const Model& m, bool rock_only) const {

@@ -18,13 +18,17 @@
 // at a thread count (up to kMaxThreads; beyond it, equal counts).
 //
 //   static LoopSplit split;  // one per loop
-//   #pragma omp parallel reduction(+ : count)
-//   {
-//     const LoopSplit::Range r = split.begin(n);
+//   split.run(n, [&](const LoopSplit::Range& r) {
 //     for (std::int64_t i = r.lo; i < r.hi; ++i) ...
-//     split.end(r);
-//   }
-//   split.update();
+//   });
+//   const std::int64_t count = split.run_reduce(n, std::int64_t{0}, [&](const LoopSplit::Range& r) {
+//     std::int64_t c = 0;
+//     for (std::int64_t i = r.lo; i < r.hi; ++i) c += ...;
+//     return c;
+//   }, std::plus<>{});
+//
+// (run and run_reduce are the parallel region with begin, end and update; begin, end and update
+// are public for loops that need more, and for the tests)
 #pragma once
 #include <omp.h>
 
@@ -32,6 +36,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <tuple>
 #include <utility>
 
@@ -99,6 +104,41 @@ class LoopSplit {
       cut_[k] = c;
     }
   }
+
+  // One parallel region: every thread runs body(its range), then the cuts move.
+  template <class Body>
+  void run(std::int64_t n, Body&& body) {
+#pragma omp parallel
+    {
+      const Range r = begin(n);
+      body(r);
+      end(r);
+    }
+    update();
+  }
+  // The same for a loop that counts or takes maxima: body(range) returns the thread's value, and
+  // the threads' values are folded into init with join. Only for values whose join is exact in
+  // any order (integer sums, maxima): the threads fold in the order they finish.
+  template <class T, class Body, class Join>
+  T run_reduce(std::int64_t n, T init, Body&& body, Join&& join) {
+#pragma omp parallel
+    {
+      const Range r = begin(n);
+      const T mine = body(r);
+      end(r);
+#pragma omp critical(cdem_loop_split_join)
+      init = join(init, mine);
+    }
+    update();
+    return init;
+  }
+
+  // A count and a maximum (the contacts of a pass and their deepest penetration), for run_reduce.
+  struct CountMax {
+    std::int64_t count = 0;
+    double max = 0;
+    static CountMax join(CountMax a, CountMax b) { return {a.count + b.count, std::max(a.max, b.max)}; }
+  };
 
   // Cut k as a fraction of the loop (0 at k = 0; tests, reports).
   double cut(int k) const { return cut_[static_cast<std::size_t>(k)]; }

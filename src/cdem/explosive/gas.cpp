@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 
 #include "cdem/core/loop_split.hpp"
@@ -58,6 +59,21 @@ void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>&
   }
   g.burnt_volume.assign(g.bodies.size(), 0.0);
   g.cavity.assign(g.bodies.size(), 0.0);
+  // The crack pass's per-list arrays follow the list of opened interfaces, which grows during
+  // the blast up to every interface: room for that now, so that no step allocates.
+  bool cracks = false;
+  for (const auto& b : g.bodies) cracks = cracks || b.model == GasModel::Cracks;
+  if (cracks) {
+    const std::size_t ni = m.n_ifaces();
+    g.list_open.reserve(ni);
+    g.list_aperture.reserve(ni);
+    g.list_state.reserve(ni);
+    g.list_body.reserve(ni);
+    g.list_fill_area.reserve(ni);
+    g.list_vent.reserve(ni);
+    g.load_first.reserve(ni);
+    g.load_power.reserve(ni * static_cast<std::size_t>(m.springs_per_iface));
+  }
   g.scratch.assign(2 * g.bodies.size(), 0.0);
 }
 
@@ -118,13 +134,11 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
   // are most of this function's cost): in parallel, each interface on its own, so the serial
   // passes below see the same values for any thread count
   if (cracks) {
-    g.list_open.resize(nlist);  // (grows with the list of opened interfaces only)
+    g.list_open.resize(nlist);  // (within the room init_gas_field made)
     g.list_aperture.resize(nlist);
     const auto nl = static_cast<std::int64_t>(nlist);
     static LoopSplit split_open;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_open.begin(nl);
+    split_open.run(nl, [&](const LoopSplit::Range& part) {
       for (std::int64_t k = part.lo; k < part.hi; ++k) {
         if (k + kPrefetchAhead < nl) prefetch_ahead(k + kPrefetchAhead, false);
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
@@ -132,9 +146,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         g.list_open[k] = o;
         g.list_aperture[k] = o ? aperture(i) : 0.0;
       }
-      split_open.end(part);
-    }
-    split_open.update();
+    });
   }
   // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed, the
   // choked flux per density of each body: computed once per body, the same value for all its
@@ -181,15 +193,13 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
                            : 0.0;
     };
     enum : std::uint8_t { kSkip = 0, kTerms = 1, kReached = 2, kSerial = 4 };
-    g.list_state.resize(nlist);  // (grows with the list of opened interfaces only)
+    g.list_state.resize(nlist);  // (within the room init_gas_field made)
     g.list_body.resize(nlist);
     g.list_fill_area.resize(nlist);
     g.list_vent.resize(nlist);
     static LoopSplit split_fill;
     const auto nl = static_cast<std::int64_t>(nlist);
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_fill.begin(nl);
+    split_fill.run(nl, [&](const LoopSplit::Range& part) {
       for (std::int64_t k = part.lo; k < part.hi; ++k) {
         // (the interface's own data 2 x kPrefetchAhead entries ahead, its blocks' kPrefetchAhead)
         if (k + 2 * kPrefetchAhead < nl) {
@@ -220,9 +230,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         }
         g.list_state[k] = st;
       }
-      split_fill.end(part);
-    }
-    split_fill.update();
+    });
     for (std::size_t k = 0; k < nlist; ++k) {
       std::uint8_t st = g.list_state[k];
       if (st == kSkip) continue;
@@ -290,13 +298,11 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     }
   }
   // 3. the filled cracks' faces pushed apart by f P: the pressures in parallel (into the
-  // apertures' array, no longer needed), then the loads in list order
+  // apertures' array, no longer needed), then the loads (recorded in list order)
   if (cracks) {
     const auto nl = static_cast<std::int64_t>(nlist);
     static LoopSplit split_pressure;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_pressure.begin(nl);
+    split_pressure.run(nl, [&](const LoopSplit::Range& part) {
       for (std::int64_t k = part.lo; k < part.hi; ++k) {
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
         const std::int32_t d = g.iface_body[i];
@@ -307,14 +313,13 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         g.iface_gas_p[i] = static_cast<float>(p);
         g.list_aperture[k] = p;
       }
-      split_pressure.end(part);
-    }
-    split_pressure.update();
+    });
     // the loads: their places in the record in list order (a prefix count), then each
-    // interface's loads written and their power terms formed in parallel, then the forces
-    // added and the terms summed in list order, serially (the same sums, in the same order, as
-    // adding them one by one: bitwise the same for any thread count)
-    g.load_first.resize(nlist);  // (grows with the list of opened interfaces only)
+    // interface's loads written and their power terms formed in parallel; then the forces added
+    // per block in parallel, each node's in record order, and the power terms summed in record
+    // order, serially (below: the same sums, in the same order, as adding the loads one by one,
+    // bitwise the same for any thread count)
+    g.load_first.resize(nlist);  // (within the room init_gas_field made)
     std::int64_t nload = 0;
     for (std::size_t k = 0; k < nlist; ++k) {
       g.load_first[k] = nload;
@@ -323,9 +328,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     const std::size_t first = out.append_pairs(static_cast<std::size_t>(nload));
     g.load_power.resize(static_cast<std::size_t>(nload));
     static LoopSplit split_loads;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_loads.begin(nl);
+    split_loads.run(nl, [&](const LoopSplit::Range& part) {
       for (std::int64_t k = part.lo; k < part.hi; ++k) {
         if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
           prefetch_ahead(k + kPrefetchAhead, true);
@@ -343,9 +346,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           g.load_power[r] = dot(f, m.v[b] - m.v[a]);
         }
       }
-      split_loads.end(part);
-    }
-    split_loads.update();
+    });
     // The forces: per block in parallel, each node's loads in the record's order (its block's
     // loaded interfaces sorted by their places in the record, whatever the list's order), so
     // each node's sum is the one adding the record in order gives, bit for bit (each node is
@@ -353,18 +354,18 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     static LoopSplit split_apply;
     const auto nbk = static_cast<std::int64_t>(m.n_blocks());
     const Vec3* const force = out.pair_force.data() + first;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_apply.begin(nbk);
+    split_apply.run(nbk, [&](const LoopSplit::Range& part) {
       for (std::int64_t b = part.lo; b < part.hi; ++b) {
         if (m.tied && !m.block_active[b]) continue;  // (no opened interface: no crack face)
         // its loaded interfaces (a block has at most 4 faces): record place, side code
         std::array<std::pair<std::int32_t, std::int32_t>, 4> mine;
         int nmine = 0;
-        for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1] && nmine < 4; ++e) {
+        for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
           const std::int32_t code = m.block_iface_list[e];
           const std::int32_t r = g.iface_load[static_cast<std::size_t>((code > 0 ? code : -code) - 1)];
-          if (r >= 0) mine[nmine++] = {r, code};
+          if (r < 0) continue;
+          assert(nmine < 4 && "a block with more than 4 faces");  // (tri, quad, tet: at most 4)
+          mine[nmine++] = {r, code};
         }
         std::sort(mine.begin(), mine.begin() + nmine);
         for (int j = 0; j < nmine; ++j) {
@@ -377,9 +378,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           }
         }
       }
-      split_apply.end(part);
-    }
-    split_apply.update();
+    });
     out.book_pair_power(static_cast<std::size_t>(nload), g.load_power.data());
   }
 }

@@ -389,16 +389,14 @@ void tet_chunk(Model& m, std::int32_t b0, int n, bool* inv) {
 
 std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
                               std::int32_t* first_inverted, bool gather_springs) {
-  std::int64_t inverted = 0;
   constexpr int W = kTetChunk;
   const std::int32_t n_chunks = end > begin ? (end - begin + W - 1) / W : 0;
   const bool has_s0 = !m.stress0.empty();
   // (the polar decomposition's iterations and the gather of the opened interfaces' forces cost
   // more where the rock is broken and turning)
   static LoopSplit split;
-#pragma omp parallel reduction(+ : inverted)
-  {
-    const LoopSplit::Range r = split.begin(n_chunks);
+  return split.run_reduce(n_chunks, std::int64_t{0}, [&](const LoopSplit::Range& r) {
+    std::int64_t inverted = 0;
     for (auto c = static_cast<std::int32_t>(r.lo); c < r.hi; ++c) {
       const std::int32_t b0 = begin + c * W;
       const int n = std::min(W, end - b0);
@@ -422,10 +420,8 @@ std::int64_t block_forces_tet(Model& m, std::int32_t begin, std::int32_t end,
         if (inv[l]) note_inverted(inverted, b, first_inverted);
       }
     }
-    split.end(r);
-  }
-  split.update();
-  return inverted;
+    return inverted;
+  }, std::plus<>{});
 }
 
 // The tet kernel one block at a time (the form before vectorisation, kept as the reference the

@@ -66,9 +66,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const auto ngrp = static_cast<std::int64_t>(cs.grp_speed.size());
     const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
     static LoopSplit split_speed;
-#pragma omp parallel reduction(max : vmax)
-    {
-      const LoopSplit::Range part = split_speed.begin(ngrp);
+    vmax = split_speed.run_reduce(ngrp, 0.0, [&](const LoopSplit::Range& part) {
+      double v_top = 0;
       for (std::int64_t g = part.lo; g < part.hi; ++g) {
         double vg = 0;  // (the group's largest speed: the sleep's local clocks, below)
         for (std::int64_t b = g * kSleepGroup; b < std::min(nbk, (g + 1) * kSleepGroup); ++b) {
@@ -80,11 +79,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
           }
         }
         cs.grp_speed[g] = vg;
-        vmax = std::max(vmax, vg);
+        v_top = std::max(v_top, vg);
       }
-      split_speed.end(part);
-    }
-    split_speed.update();
+      return v_top;
+    }, [](double x, double y) { return std::max(x, y); });
   }
   bool due = first_build || cs.rebuild_due;
   if (release_pending) {
@@ -113,17 +111,13 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   {
     const auto ngrp = static_cast<std::int64_t>(cs.grp_clock.size());
     static LoopSplit split_clock;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_clock.begin(ngrp);
+    split_clock.run(ngrp, [&](const LoopSplit::Range& part) {
       for (std::int64_t g = part.lo; g < part.hi; ++g) {
         double v = 0;
         for (auto i = cs.grp_nbr_start[g]; i < cs.grp_nbr_start[g + 1]; ++i) v = std::max(v, cs.grp_speed[cs.grp_nbr[i]]);
         cs.grp_clock[g] += v * dt;
       }
-      split_clock.end(part);
-    }
-    split_clock.update();
+    });
   }
   const auto npair = static_cast<std::int64_t>(cs.pair_node.size());
   if (npair == 0) {
@@ -149,9 +143,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // compiler would round the geometry differently, and the reject would then differ in the last
   // bit at planes through a node)
   static LoopSplit split_drift;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_drift.begin(ncb);
+  split_drift.run(ncb, [&](const LoopSplit::Range& part) {
     for (std::int64_t j = part.lo; j < part.hi; ++j) {
       const std::int32_t n0 = m.block_first_node[cs.cblock[j]];
       const int nbn = m.block_first_node[cs.cblock[j] + 1] - n0;
@@ -163,13 +155,9 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       cs.cb_drift[2 * j] = dmin;
       cs.cb_drift[2 * j + 1] = dmax;
     }
-    split_drift.end(part);
-  }
-  split_drift.update();
+  });
   static LoopSplit split_planes;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_planes.begin(ncb);
+  split_planes.run(ncb, [&](const LoopSplit::Range& part) {
     for (std::int64_t j = part.lo; j < part.hi; ++j) {
       const std::int32_t b = cs.cblock[j], n0 = m.block_first_node[b];
       const int nbn = m.block_first_node[b + 1] - n0;
@@ -203,9 +191,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       bp.rho = simplex_tolerance_reach(m.block_type[b], &m.x[n0], bp.a0, bp.n, bp.tol);
     }
-    split_planes.end(part);
-  }
-  split_planes.update();
+  });
   // (a block whose tolerance reach exceeds the cap wakes all its pairs this step;
   // rare: a sliver, a block crushed flat or inverted)
   int over_cap = 0;
@@ -251,6 +237,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   std::int32_t* const scratch = cs.near_scratch.data();
   const Vec3* const x_ = m.x.data();
   static LoopSplit split_near;
+  // (begin and end by hand: the thread's time is its pass, not the wait at the barrier after it)
 #pragma omp parallel
   {
     const LoopSplit::Range part = split_near.begin(npair);
@@ -315,7 +302,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       gwake[p] = wf;
       if (near) scratch[lo + count++] = static_cast<std::int32_t>(p);
     }
-    split_near.end(part);  // (the work, not the wait at the barrier)
+    split_near.end(part);
     cs.near_count[t + 1] = count;
 #pragma omp atomic
     cs.pair_tests += tests;
@@ -334,9 +321,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
   // (a') geometry of every near pair
   static LoopSplit split_geom;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_geom.begin(nnear);
+  split_geom.run(nnear, [&](const LoopSplit::Range& part) {
     for (std::int64_t ii = part.lo; ii < part.hi; ++ii) {
       if (ii + 2 * kPrefetchAhead < nnear) {
         const auto q = static_cast<std::size_t>(cs.near[ii + 2 * kPrefetchAhead]);
@@ -461,9 +446,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       (void)margin;
       cs.pair_w[p] = w;
     }
-    split_geom.end(part);
-  }
-  split_geom.update();
+  });
   // (b) per node, per body: one block keeps the contact: the one that held it through the same
   // face since the last step, else the one whose face the node crossed (largest gap a step ago),
   // the first of equals
@@ -476,9 +459,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     cs.near_group.push_back(static_cast<std::int32_t>(nnear));
     const auto nd = static_cast<std::int64_t>(cs.near_group.size()) - 1;
     static LoopSplit split_owner;
-#pragma omp parallel
-    {
-      const LoopSplit::Range part = split_owner.begin(nd);
+    split_owner.run(nd, [&](const LoopSplit::Range& part) {
       for (std::int64_t d = part.lo; d < part.hi; ++d) {
         const auto i0 = cs.near_group[d], i1 = cs.near_group[d + 1];
         for (auto ip = i0; ip < i1; ++ip) {
@@ -526,15 +507,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
           }
         }
       }
-      split_owner.end(part);
-    }
-    split_owner.update();
+    });
   }
   // (c) forces and state of the near pairs
   static LoopSplit split_force;
-#pragma omp parallel reduction(+ : active) reduction(max : pen_ratio)
-  {
-    const LoopSplit::Range part = split_force.begin(nnear);
+  const LoopSplit::CountMax touched = split_force.run_reduce(nnear, LoopSplit::CountMax{}, [&](const LoopSplit::Range& part) {
+    LoopSplit::CountMax held;
     for (std::int64_t ii = part.lo; ii < part.hi; ++ii) {
       if (ii + kPrefetchAhead < nnear) {
         const auto q = static_cast<std::size_t>(cs.near[ii + kPrefetchAhead]);
@@ -600,8 +578,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         mag = norm(fdrag);
         if (mag > cap) fdrag *= (cap > 0 ? cap / mag : 0.0);
         force = fn * nrm + fdrag;
-        ++active;
-        pen_ratio = std::max(pen_ratio, gap / m.block_size[b]);  // (the ignored part not counted)
+        ++held.count;
+        held.max = std::max(held.max, gap / m.block_size[b]);  // (the ignored part not counted)
       }
       const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
       // work done on the contact by the relative motion: -F . du (F acts on the node)
@@ -613,9 +591,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       cs.pair_force[p] = force;
       cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
     }
-    split_force.end(part);
-  }
-  split_force.update();
+    return held;
+  }, LoopSplit::CountMax::join);
+  active += touched.count;
+  pen_ratio = std::max(pen_ratio, touched.max);
   // (c') edge-to-edge contacts (3D), their forces added to f first, in their list's order
   if (cs.edges) edge_contact_forces(m, cs, dt, active, pen_ratio);
   cs.active = active;
@@ -627,9 +606,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // of the few pairs in contact, scattered over the blocks' nodes).
   const auto ng = static_cast<std::int64_t>(cs.near_group.size()) - 1;
   static LoopSplit split_gather;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_gather.begin(ng);
+  split_gather.run(ng, [&](const LoopSplit::Range& part) {
     for (std::int64_t d = part.lo; d < part.hi; ++d) {
       Vec3 acc{};
       bool any = false;
@@ -639,9 +616,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       if (any) m.f[cs.pair_node[cs.near[cs.near_group[d]]]] += acc;
     }
-    split_gather.end(part);
-  }
-  split_gather.update();
+  });
   cs.face_touched.clear();
   cs.face_sum.clear();
   for (std::int64_t i = 0; i < nnear; ++i) {

@@ -338,9 +338,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   // geometry, computed here (eb_need 2: it has it)
   const auto neb = static_cast<std::int64_t>(cs.eb_block.size());
   static LoopSplit split_spheres;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_spheres.begin(neb);
+  split_spheres.run(neb, [&](const LoopSplit::Range& part) {
     for (std::int64_t i = part.lo; i < part.hi; ++i) {
       const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
       tet_sphere(m, b, cs.eb_c[i], cs.eb_r[i]);
@@ -362,9 +360,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
                                    ? dmax
                                    : std::numeric_limits<double>::infinity();
     }
-    split_spheres.end(part);
-  }
-  split_spheres.update();
+  });
   // the pairs awake this step (below) need their blocks' geometry: each computed once
   const bool sleep = cs.cfg.sleep;
   auto asleep = [&](std::int64_t j) {
@@ -383,9 +379,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     }
   };
   static LoopSplit split_awake;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_awake.begin(nbp);
+  split_awake.run(nbp, [&](const LoopSplit::Range& part) {
     for (std::int64_t j = part.lo; j < part.hi; ++j) {
       const bool awake = !asleep(j);
       cs.bp_awake_flag[j] = awake;
@@ -394,9 +388,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
         mark(cs.bp_ib[j]);
       }
     }
-    split_awake.end(part);
-  }
-  split_awake.update();
+  });
   // the awake block pairs in order (the count pass below runs over them alone, their blocks'
   // geometry prefetched: 2 x 10 cache lines scattered over the blocks, most of its time)
   cs.bp_awake.clear();  // (within its capacity)
@@ -423,9 +415,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   std::fill(cs.bp_count.begin(), cs.bp_count.end(), 0);  // (the asleep pairs: none)
   const auto nawake = static_cast<std::int64_t>(cs.bp_awake.size());
   static LoopSplit split_count;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split_count.begin(nawake);
+  split_count.run(nawake, [&](const LoopSplit::Range& part) {
     for (std::int64_t w = part.lo; w < part.hi; ++w) {
       if (w + kPrefetchAhead < nawake) {
         const std::int32_t ja = cs.bp_awake[w + kPrefetchAhead];
@@ -480,20 +470,15 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       cs.bp_count[j + 1] = count;
       cs.bp_hits[j] = hits;
     }
-    split_count.end(part);
-  }
-  split_count.update();
+  });
   cs.block_pair_tests += nawake;  // (every awake block pair is tested)
   for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
   const auto nec = static_cast<std::size_t>(cs.bp_count[nbp]);
   for_each_edge_array(cs, [&](auto&, auto& now) { now.resize(nec); });
-  std::int64_t act = 0;
-  double pen = 0;
   // (2) the same tests again, now writing each contact at its offset with its force and energy
   static LoopSplit split_fill;
-#pragma omp parallel reduction(+ : act) reduction(max : pen)
-  {
-    const LoopSplit::Range part = split_fill.begin(nbp);
+  const LoopSplit::CountMax touched = split_fill.run_reduce(nbp, LoopSplit::CountMax{}, [&](const LoopSplit::Range& part) {
+    LoopSplit::CountMax held;
     for (std::int64_t j = part.lo; j < part.hi; ++j) {
       if (cs.bp_count[j + 1] == cs.bp_count[j]) continue;  // nothing here
       const std::int32_t a = cs.bp_a[j], b = cs.bp_b[j];
@@ -590,8 +575,8 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
             }
             fp = fn * h.n + ftp;
             if (gap > 0) {
-              ++act;
-              pen = std::max(pen, gap / std::min(m.block_size[a], m.block_size[b]));
+              ++held.count;
+              held.max = std::max(held.max, gap / std::min(m.block_size[a], m.block_size[b]));
             }
           } else {
             d0 = 0;
@@ -611,11 +596,10 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
           ++o;
         }
     }
-    split_fill.end(part);
-  }
-  split_fill.update();
-  active += act;
-  pen_ratio = std::max(pen_ratio, pen);
+    return held;
+  }, LoopSplit::CountMax::join);
+  active += touched.count;
+  pen_ratio = std::max(pen_ratio, touched.max);
   // contacts of the last step whose block pair is gone (a rebuild dropped it): their stored
   // energy and their dissipation so far go to the closed account
   for (std::size_t q = 0; q < cs.ec_a.size(); ++q)

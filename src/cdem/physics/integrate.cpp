@@ -88,9 +88,7 @@ void integrate_clusters(Model& m, const Boundaries& bc, double dt, double t_mid,
   // (a vertex inside the rock has some twenty nodes, one on its surface a few; a broken vertex's
   // nodes are clusters of their own: the cost per vertex varies along the model)
   static LoopSplit split;
-#pragma omp parallel
-  {
-    const LoopSplit::Range part = split.begin(nv);
+  split.run(nv, [&](const LoopSplit::Range& part) {
     for (std::int64_t vx = part.lo; vx < part.hi; ++vx) {
       double ke_v = 0, cke_v = 0, diss_v = 0, react_v = 0, react_after_v = 0;
       const std::int32_t o1 = off[vx + 1];
@@ -144,9 +142,7 @@ void integrate_clusters(Model& m, const Boundaries& bc, double dt, double t_mid,
       reaction[2 * vx] = react_v;
       reaction[2 * vx + 1] = react_after_v;
     }
-    split.end(part);
-  }
-  split.update();
+  });
 }
 
 }  // namespace

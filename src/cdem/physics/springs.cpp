@@ -592,19 +592,16 @@ void spring_forces_chunked(Model& m, double dt, double t, std::int64_t lo, std::
   const auto ni = std::min(hi, static_cast<std::int64_t>(kList ? m.active_ifaces.size() : m.n_ifaces()));
   const std::int64_t nc = ni > lo ? (ni - lo + kChunk - 1) / kChunk : 0;
   const bool fe = !m.sp_w.empty();
-  std::int64_t released = 0;
   static LoopSplit split;  // (the chunks of opened, softening points cost several elastic ones)
-#pragma omp parallel reduction(+ : released)
-  {
-    const LoopSplit::Range r = split.begin(nc);
+  const std::int64_t released = split.run_reduce(nc, std::int64_t{0}, [&](const LoopSplit::Range& r) {
+    std::int64_t n_released = 0;
     for (std::int64_t c = r.lo; c < r.hi; ++c) {
       const std::int64_t i0 = lo + c * kChunk;
-      released += spring_chunk<NP, kG0, kList>(
+      n_released += spring_chunk<NP, kG0, kList>(
           m, i0, static_cast<int>(std::min<std::int64_t>(kChunk, ni - i0)), dt, t, fe, list);
     }
-    split.end(r);
-  }
-  split.update();
+    return n_released;
+  }, std::plus<>{});
   m.released_points += released;
   if (kList) m.iface_normal_set = true;
 }
@@ -703,13 +700,9 @@ void spring_forces_reference(Model& m, double dt, double t) {
 void gather_spring_forces(Model& m) {
   const auto nb = static_cast<std::int32_t>(m.n_blocks());
   static LoopSplit split;  // (the blocks with active interfaces gather, the others do not)
-#pragma omp parallel
-  {
-    const LoopSplit::Range r = split.begin(nb);
+  split.run(nb, [&](const LoopSplit::Range& r) {
     for (auto b = static_cast<std::int32_t>(r.lo); b < r.hi; ++b) add_spring_forces(m, b);
-    split.end(r);
-  }
-  split.update();
+  });
 }
 
 void release_unused_spring_state(Model& m) {

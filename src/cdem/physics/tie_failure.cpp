@@ -69,11 +69,9 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
   const int np = m.springs_per_iface;
   if (flag.size() != static_cast<std::size_t>(ni)) flag.assign(ni, 0);
-  std::int64_t failed = 0;
   static LoopSplit split;
-#pragma omp parallel reduction(+ : failed)
-  {
-    const LoopSplit::Range part = split.begin(ni);
+  const std::int64_t failed = split.run_reduce(ni, std::int64_t{0}, [&](const LoopSplit::Range& part) {
+    std::int64_t n_failed = 0;
     for (std::int64_t i = part.lo; i < part.hi; ++i) {
       if (!m.iface_check[i]) continue;
       // Quick reject from the stresses alone: |t| = |sigma n| <= ||sigma||_F for any unit n, and a
@@ -115,11 +113,10 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
       const SpringLaw& law = m.spring_laws[m.iface_material[i]];
       const std::uint8_t mode = tie_strength_exceeded(law, tn * area, ts2 * area * area, area);
       flag[i] = mode;
-      failed += mode != kModeNone;
+      n_failed += mode != kModeNone;
     }
-    split.end(part);
-  }
-  split.update();
+    return n_failed;
+  }, std::plus<>{});
   if (failed == 0) return 0.0;
   double insertion = 0;
   for (std::int64_t i = 0; i < ni; ++i) {

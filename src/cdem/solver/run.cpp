@@ -144,13 +144,26 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
   // fast and the energy balance still closes, since it is booked: in the coarse SPEC 5.3 scheme
   // A at dt_safety 0.8, 4.4 MJ in 0.2 ms (docs/pile_pit_3d.md). The results after that are not
   // to be trusted, so the run stops.
-  if (contact_limit > 0 && e.contact_friction < -contact_limit * std::max(input, floor))
+  if (contact_limit > 0 && e.contact_friction < -contact_limit * std::max(input, floor)) {
+    // where: the node-to-face pair that has booked the most energy made (the edge contacts and
+    // the contacts that ended are in the sum, not in this search)
+    const ContactSet& cs = sim.contact();
+    std::size_t worst = cs.pair_diss.size();
+    for (std::size_t p = 0; p < std::min(cs.pair_diss.size(), cs.pair_node.size()); ++p)
+      if (cs.pair_diss[p] < 0 && (worst == cs.pair_diss.size() || cs.pair_diss[p] < cs.pair_diss[worst])) worst = p;
+    const std::string where =
+        worst < cs.pair_diss.size()
+            ? fmt::format(" The pair that made the most: node {} of {}, against block {} ({:.4g} J).",
+                          cs.pair_node[worst], describe_node(m, static_cast<std::size_t>(cs.pair_node[worst])),
+                          cs.pair_block[worst], cs.pair_diss[worst])
+            : std::string();
     return fmt::format("at t = {:.6g} s (step {}): contact made energy: the general contacts' booked "
                        "dissipation is {:.4g} J, more than {} x the energy put in ({:.4g} J) below "
-                       "zero. A penalty contact has gone unstable: lower simulation.dt_safety or "
+                       "zero.{} A penalty contact has gone unstable: lower simulation.dt_safety or "
                        "contact.stiffness_factor (simulation.contact_energy_limit = 0 turns this "
                        "check off)",
-                       t, sim.steps(), e.contact_friction, contact_limit, input);
+                       t, sim.steps(), e.contact_friction, contact_limit, input, where);
+  }
   return {};
 }
 

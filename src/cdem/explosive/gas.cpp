@@ -41,6 +41,11 @@ bool advance_plug(double& x, double& v, double p, double a, double c, double len
   return x >= length;
 }
 
+// Does any gas body fill cracks (GasModel::Cracks)?
+static bool fills_cracks(const GasField& g) {
+  return std::any_of(g.bodies.begin(), g.bodies.end(), [](const GasBody& b) { return b.model == GasModel::Cracks; });
+}
+
 void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>& closed_sets) {
   g.iface_fill.assign(m.n_ifaces(), 0.0f);
   g.iface_gas_p.assign(m.n_ifaces(), 0.0f);
@@ -61,8 +66,7 @@ void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>&
   g.cavity.assign(g.bodies.size(), 0.0);
   // The crack pass's per-list arrays follow the list of opened interfaces, which grows during
   // the blast up to every interface: room for that now, so that no step allocates.
-  bool cracks = false;
-  for (const auto& b : g.bodies) cracks = cracks || b.model == GasModel::Cracks;
+  const bool cracks = fills_cracks(g);
   if (cracks) {
     const std::size_t ni = m.n_ifaces();
     g.list_open.reserve(ni);
@@ -93,8 +97,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
   if (!g.any()) return;
   g.scratch.assign(2 * nb, 0.0);  // per body: crack volume, crack vent area (no reallocation)
   const int np = m.springs_per_iface;
-  bool cracks = false;
-  for (const auto& b : g.bodies) cracks = cracks || b.model == GasModel::Cracks;
+  const bool cracks = fills_cracks(g);
   const std::size_t nlist = m.tied ? m.active_ifaces.size() : m.n_ifaces();
   auto iface_at = [&](std::size_t k) {
     return m.tied ? static_cast<std::size_t>(m.active_ifaces[k]) : k;

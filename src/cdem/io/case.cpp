@@ -172,7 +172,7 @@ Case parse_case(std::string_view text, const std::string& path,
   c.history_interval = sim->non_negative("history_interval", c.end_time / 200.0);
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
   c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
-  c.contact_energy_limit = sim->non_negative("contact_energy_limit", 0.02);
+  c.contact_energy_limit = sim->non_negative("contact_energy_limit", Case::kContactEnergyLimit);
   c.max_steps = sim->integer("max_steps", 0);
   if (c.max_steps < 0)
     throw InputError(fmt::format("{}: expected an integer >= 0 (0: no limit), got {}", sim->where("max_steps"), c.max_steps));

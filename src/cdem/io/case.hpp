@@ -66,7 +66,8 @@ struct Case {
   double history_interval = 0;          // monitors, energy, fracture degree, s (default end_time/200; 0: every step)
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
-  double contact_energy_limit = 0.02;   // stop when contact has made more than this share of the
+  static constexpr double kContactEnergyLimit = 0.02;
+  double contact_energy_limit = kContactEnergyLimit;   // stop when contact has made more than this share of the
                                         // energy put in (its booked dissipation below -limit x it)
   std::int64_t max_steps = 0;           // 0: unlimited
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces

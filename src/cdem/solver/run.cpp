@@ -148,11 +148,12 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
     // where: the node-to-face pair that has booked the most energy made (the edge contacts and
     // the contacts that ended are in the sum, not in this search)
     const ContactSet& cs = sim.contact();
-    std::size_t worst = cs.pair_diss.size();
-    for (std::size_t p = 0; p < std::min(cs.pair_diss.size(), cs.pair_node.size()); ++p)
-      if (cs.pair_diss[p] < 0 && (worst == cs.pair_diss.size() || cs.pair_diss[p] < cs.pair_diss[worst])) worst = p;
+    const std::size_t np = std::min(cs.pair_diss.size(), cs.pair_node.size());
+    const auto worst = static_cast<std::size_t>(
+        std::min_element(cs.pair_diss.begin(), cs.pair_diss.begin() + static_cast<std::ptrdiff_t>(np)) -
+        cs.pair_diss.begin());
     const std::string where =
-        worst < cs.pair_diss.size()
+        worst < np && cs.pair_diss[worst] < 0
             ? fmt::format(" The pair that made the most: node {} of {}, against block {} ({:.4g} J).",
                           cs.pair_node[worst], describe_node(m, static_cast<std::size_t>(cs.pair_node[worst])),
                           cs.pair_block[worst], cs.pair_diss[worst])

@@ -28,8 +28,10 @@
 // Penalty, compression only, along that face's normal n:
 // F_n = k (d - d0) - c v_n (>= 0; c = 2 zeta sqrt(k m) the optional damping; d0 the ignored
 // penetration: when a node comes inside a block deeper than twice its normal approach in one
-// step, 2 |v_n| dt, the excess is not pushed back at once, which would be an impulse from nothing;
-// d0 then only shrinks as the node moves out, as explicit codes treat initial penetrations),
+// step, 2 max(0, -v_n) dt, the excess is not pushed back at once, which would be an impulse from
+// nothing, and deeper than that plus the block's tolerance none of it is (the node did not just
+// arrive); d0 then only shrinks as the node moves out, as explicit codes treat initial
+// penetrations),
 // Coulomb friction on an incremental tangential spring k_t = k G/E: F_t += -k_t du_t,
 // |F_t| <= mu F_n. The node gets F = F_n n + F_t, the face's nodes -w_i F with w the
 // barycentric coordinates of the node's projection (clamped to the face). The stiffness k is the

@@ -285,11 +285,12 @@ def magnify_note(frame):
     return "" if frame.magnify == 1.0 else f" (displacements x{frame.magnify:g})"
 
 
-def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None, charge=None):
-    """The last damage picture, large (or into a given axes for the comparison)."""
+def plot_damage_final(run, frame, out_dir, name, written, ax=None, fig=None, charge=None, box=None):
+    """The last damage picture, large (or into a given axes for the comparison; `box`: limits
+    shared with the other panels, else the frame's own)."""
     v = frame.view()
     polys = v.polys
-    box = view_box([polys], frame, v.idx)
+    box = box if box is not None else view_box([polys], frame, v.idx)
     own = ax is None
     if own:
         aspect = box_aspect(box)

@@ -28,6 +28,7 @@ import os
 import resource
 import subprocess
 import sys
+import textwrap
 import time
 
 import numpy as np
@@ -693,6 +694,16 @@ def charge_cells(v, frame):
     return v.setup.charge_cell
 
 
+def variant_key(variants, width=110):
+    """The variants' long labels, one line each (wrapped at `width`), for a figure whose panels
+    are titled by the short names: panel titles of 40-80 characters ran into each other."""
+    lines = []
+    for v in variants:
+        text = v.label if v.label.startswith(v.name) else f"{v.name}: {v.label}"
+        lines += textwrap.wrap(text, width, subsequent_indent="    ") or [v.name]
+    return "\n".join(lines)
+
+
 def panel_grid(nr, nc, aspect):
     """A figure of nr x nc map panels (rows: variants, columns: times) with a shared colour bar."""
     w, h = plots.figsize_for(nc, nr, aspect, 3.4, False, True, 2)
@@ -769,7 +780,7 @@ def plot_vertical(variants, times, out_dir, written, notes):
                     handle, handle_ax = hc, ax
                 flip = kind == "section" and f.s < 0
                 plots.set_limits(ax, box, f"{'xyz'[idx[0]]} (m)", f"{'xyz'[idx[1]]} (m)", flip)
-                ax.set_title(f"{v.label}, {plots.fmt_time(f.time)}", fontsize=9)
+                ax.set_title(f"{v.name}, {plots.fmt_time(f.time)}", fontsize=9)
         if m is not None:
             cb = plots.colorbar(fig, m, ax=axes.ravel().tolist(), shrink=0.8,
                                 extend="both" if vmax > top else "neither")
@@ -779,7 +790,8 @@ def plot_vertical(variants, times, out_dir, written, notes):
             handle_ax.legend(handles=[handle], loc="lower left", fontsize=7, framealpha=0.85)
         what = {"model": "the model (plane strain)", "top": "the free surface (faces looking up)",
                 "section": "vertical section through the model centre"}[kind]
-        fig.suptitle(f"Displacement along up: {what}\none colour scale for all panels")
+        fig.suptitle(f"Displacement along up: {what}; one colour scale for all panels\n"
+                     f"{variant_key([v for v, _ in panels])}", fontsize=10)
         name = {"model": "vertical_displacement.png", "top": "vertical_displacement_top.png",
                 "section": "vertical_displacement_section.png"}[kind]
         names.append(save(fig, out_dir, name, written))
@@ -795,10 +807,12 @@ def plot_damage(variants, times, out_dir, written, notes):
     rows = [(v, frames) for v, frames in rows if frames]
     if not rows:
         return None
+    # one box for every panel (each frame's own made the panels' scales differ with the
+    # fragments in flight)
     f0 = rows[0][1][0]
-    v0 = f0.view()
-    aspect = plots.box_aspect(plots.view_box([v0.polys], f0, v0.idx))
-    fig, axes = panel_grid(len(rows), max(len(frames) for _, frames in rows), aspect)
+    idx = f0.view().idx
+    box = plots.view_box([f.view().polys for _, frames in rows for f in frames], f0, idx)
+    fig, axes = panel_grid(len(rows), max(len(frames) for _, frames in rows), plots.box_aspect(box))
     m = None
     for r, (v, frames) in enumerate(rows):
         for c in range(axes.shape[1]):
@@ -809,13 +823,14 @@ def plot_damage(variants, times, out_dir, written, notes):
             f = frames[c]
             charge = charge_cells(v, f)
             got = plots.plot_damage_final(v.run, f, out_dir, None, written, ax=ax, fig=fig,
-                                          charge=charge)
+                                          charge=charge, box=box)
             m = m if m is not None else got
-            ax.set_title(f"{v.label}, {plots.fmt_time(f.time)}", fontsize=9)
+            ax.set_title(f"{v.name}, {plots.fmt_time(f.time)}", fontsize=9)
     if m is not None:
         cb = plots.colorbar(fig, m, ax=axes.ravel().tolist(), shrink=0.8)
         cb.set_label("damage (broken fraction of interface area)")
-    fig.suptitle("Damage at the chosen output times (rows: variants); black lines: cracks")
+    fig.suptitle("Damage at the chosen output times (rows: variants); black lines: cracks\n"
+                 f"{variant_key([v for v, _ in rows])}", fontsize=10)
     return save(fig, out_dir, "damage.png", written)
 
 
@@ -875,9 +890,11 @@ def plot_fracture_regions(variants, out_dir, written, notes):
                     label=f"{v.label}: {100 * fr[c][-1]:.1f} %")
             ax.set_xlabel(f"time ({tu})")
         ax.set_title(f"region {c[len('degree_area_'):]}")
-        ax.legend(fontsize=8)
+        # (below the axes: inside, the long labels covered the curves and the axis label)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     axes[0, 0].set_ylabel("fracture degree (%)")
-    fig.suptitle("Fracture degree per region (broken / total spring-point area of the region)")
+    fig.suptitle(textwrap.fill("Fracture degree per region (broken / total spring-point area of "
+                               "the region)", max(40, int(12 * 4.8 * len(cols)))), fontsize=11)
     return save(fig, out_dir, "fracture_regions.png", written)
 
 

@@ -107,19 +107,31 @@ BodyState body_state(const Model& m, int region) {
 //    over the few hundred contact steps; measured +7.9e-4 to +2.5e-2, all losses);
 //  - the bodies separate (their mean velocities reverse).
 // ---------------------------------------------------------------------------------------------
-void impact(int dim, double offset) {
-  const double size = 0.1, gap = 1e-3, v0 = 1.0;
-  const auto mat_a = rock(1e10, 0.25, 2500, "a");
-  auto mat_b = rock(1e10, 0.25, 2500, "b");
-  Mesh mesh = merge(body(dim, 2, size, {0, 0, 0}), body(dim, 2, size, {size + gap, offset, dim == 3 ? 0.7 * offset : 0.0}), "");
+// Two cubes (edge `size`, 2 x 2 (x 2) cells, regions a and b, unbreakable inside), b's corner at
+// x = bx and shifted sideways by `offset` (0.7 x that in z), a moving at +v0 along x, b at -v0.
+struct TwoCubes {
+  BlockMaterial mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
+  InterfaceMaterial glue = interface_of(InterfaceLaw::Elastic);
+  Model model;
+  // frictionless contact, no damping
+  Case contact() const { return contact_case({mat_a, mat_b}, glue, 0.0); }
+};
+TwoCubes two_cubes(int dim, double size, double bx, double offset, double v0) {
+  TwoCubes t;
+  Mesh mesh = merge(body(dim, 2, size, {0, 0, 0}), body(dim, 2, size, {bx, offset, dim == 3 ? 0.7 * offset : 0.0}), "");
   mesh.region_names = {"a", "b"};
   for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < mesh.num_elements() / 2 ? 0 : 1;
-  const auto glue = interface_of(InterfaceLaw::Elastic);
-  Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "impact");
-  for (std::size_t n = 0; n < model.n_nodes(); ++n)
-    model.v[n] = {model.block_region[model.node_block(n)] == 0 ? v0 : -v0, 0, 0};
-  Case c = contact_case({mat_a, mat_b}, glue, 0.0);
-  Simulation sim(std::move(model), c);
+  t.model = build_model(mesh, {t.mat_a, t.mat_b}, {t.glue}, "two_cubes");
+  for (std::size_t n = 0; n < t.model.n_nodes(); ++n)
+    t.model.v[n] = {t.model.block_region[t.model.node_block(n)] == 0 ? v0 : -v0, 0, 0};
+  return t;
+}
+
+void impact(int dim, double offset) {
+  const double size = 0.1, gap = 1e-3, v0 = 1.0;
+  TwoCubes cubes = two_cubes(dim, size, size + gap, offset, v0);
+  const BlockMaterial mat_a = cubes.mat_a;
+  Simulation sim(std::move(cubes.model), cubes.contact());
   auto momentum = [&]() {
     Vec3 p{};
     double s = 0;
@@ -184,21 +196,13 @@ TEST(ContactImpact, HeadOn3D) { impact(3, 0.0); impact(3, 0.013); }
 // 2D and 3D, offset sideways as the impact test's second case (no node on a vertex).
 // ---------------------------------------------------------------------------------------------
 void deep_touch(int dim, double v0) {
-  const double size = 0.1, overlap = 0.3 * size / 2, offset = 0.013;
-  const auto mat_a = rock(1e10, 0.25, 2500, "a");
-  const auto mat_b = rock(1e10, 0.25, 2500, "b");
-  Mesh mesh = merge(body(dim, 2, size, {0, 0, 0}),
-                    body(dim, 2, size, {size - overlap, offset, dim == 3 ? 0.7 * offset : 0.0}), "");
-  mesh.region_names = {"a", "b"};
-  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < mesh.num_elements() / 2 ? 0 : 1;
-  const auto glue = interface_of(InterfaceLaw::Elastic);
-  Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "deep_touch");
-  // v0 > 0: towards each other
-  for (std::size_t n = 0; n < model.n_nodes(); ++n)
-    model.v[n] = {model.block_region[model.node_block(n)] == 0 ? v0 : -v0, 0, 0};
+  const double size = 0.1, overlap = 0.3 * size / 2;
+  TwoCubes cubes = two_cubes(dim, size, size - overlap, 0.013, v0);  // v0 > 0: towards each other
+  const BlockMaterial mat_a = cubes.mat_a;
+  const Model& model = cubes.model;
   double e0 = 0;  // the kinetic energy at the start (no strain yet)
   for (std::size_t n = 0; n < model.n_nodes(); ++n) e0 += 0.5 * model.mass[n] * dot(model.v[n], model.v[n]);
-  Simulation sim(std::move(model), contact_case({mat_a, mat_b}, glue, 0.0));
+  Simulation sim(std::move(cubes.model), cubes.contact());
   // the largest contact force of the node-to-face pairs and of the edge pairs
   auto largest = [&](const std::vector<Vec3>& forces) {
     double f = 0;

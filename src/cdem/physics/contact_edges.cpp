@@ -16,9 +16,11 @@
 //   (1 - t, t): equal and opposite, so momentum is kept to round-off. k: a quarter of the
 //   smallest contact stiffness of the four nodes (kEdgeShare), c = 2 zeta sqrt(k m) with m
 //   the smallest of their masses; d0 as for nodes: the depth beyond two steps' approach at
-//   first touch (beyond one step's approach) is ignored, then only shrinks; inside an overlap
-//   the node contacts ignore (a node of one block holding a contact in the other's body with an
-//   ignored depth) all of it. Coulomb friction as
+//   first touch (beyond one step's approach, approach = max(0, -v_n)) is ignored, then only
+//   shrinks while the crossing presses; inside an overlap the node contacts ignore (a node of
+//   one block holding a contact in the other's body with an ignored depth) a crossing not
+//   pressing ignores all its depth, each step, so it takes no force while that lasts. Coulomb
+//   friction as
 //   for the node pairs (a tangential spring k_t = k G/E capped at mu F_n).
 // Energy: stored k (d - d0)^2 / 2 + |F_t|^2 / 2 k_t; the dissipation per contact is the work done on it (the
 // trapezoidal F . du with du = dt (v_a - v_b) at the closest points) minus the change of that
@@ -237,7 +239,9 @@ std::int64_t find_prev(const ContactSet& cs, std::int64_t lo, std::int64_t hi, s
 }
 
 // Does a node of block a hold a node-to-face contact in b's body whose depth is ignored (d0
-// beyond b's tolerance: an overlap inherited, not approached)? The node pairs of this step
+// beyond the holding block's tolerance: an overlap inherited, not approached)? Not counted: a
+// node off its contact face (its whole depth ignored for that reason: a vertex sliding past
+// the face's edge, where the edge contacts are what should hold). The node pairs of this step
 // (contact.cpp runs before the edges), sorted by node.
 bool holds_ignored_overlap(const Model& m, const ContactSet& cs, std::int32_t a, std::int32_t b) {
   const std::int32_t body_b = cs.body[b];
@@ -246,7 +250,8 @@ bool holds_ignored_overlap(const Model& m, const ContactSet& cs, std::int32_t a,
          ++it) {
       const auto p = static_cast<std::size_t>(it - cs.pair_node.begin());
       const std::int32_t pb = cs.pair_block[p];
-      if (cs.pair_kf[p] >= 0 && cs.body[pb] == body_b && cs.pair_g0[p] > 1e-3 * m.block_size[pb]) return true;
+      if (cs.pair_kf[p] >= 0 && !cs.pair_off[p] && cs.body[pb] == body_b && cs.pair_g0[p] > 1e-3 * m.block_size[pb])
+        return true;
     }
   return false;
 }

@@ -146,7 +146,7 @@ Case parse_case(std::string_view text, const std::string& path,
   if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
                     "history_interval", "release_distance_factor", "energy_blowup_factor",
-                    "contact_energy_limit", "max_steps", "gravity", "interfaces", "opened_stiffness", "mass_scaling_dt", "mass_scaling_limit",
+                    "contact_energy_limit", "interface_energy_limit", "max_steps", "gravity", "interfaces", "opened_stiffness", "mass_scaling_dt", "mass_scaling_limit",
                     "allow_large_run", "checkpoint_interval", "checkpoint_wall_interval"});
   c.end_time = sim->positive("end_time");
   c.dt_safety = sim->positive("dt_safety", 0.5);
@@ -173,6 +173,7 @@ Case parse_case(std::string_view text, const std::string& path,
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
   c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
   c.contact_energy_limit = sim->non_negative("contact_energy_limit", Case::kContactEnergyLimit);
+  c.interface_energy_limit = sim->non_negative("interface_energy_limit", Case::kInterfaceEnergyLimit);
   c.max_steps = sim->integer("max_steps", 0);
   if (c.max_steps < 0)
     throw InputError(fmt::format("{}: expected an integer >= 0 (0: no limit), got {}", sim->where("max_steps"), c.max_steps));

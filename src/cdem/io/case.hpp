@@ -69,6 +69,9 @@ struct Case {
   static constexpr double kContactEnergyLimit = 0.02;
   double contact_energy_limit = kContactEnergyLimit;   // stop when contact has made more than this share of the
                                         // energy put in (its booked dissipation below -limit x it)
+  static constexpr double kInterfaceEnergyLimit = 0.02;
+  double interface_energy_limit = kInterfaceEnergyLimit;  // stop when the interfaces' booked dissipation has
+                                        // fallen more than this share of the energy put in below its peak
   std::int64_t max_steps = 0;           // 0: unlimited
   InterfaceMode interface_mode = InterfaceMode::Tied;  // simulation.interfaces
   double opened_stiffness = 1.0;        // tied: opened points' share eta of the blocks' omega_max^2

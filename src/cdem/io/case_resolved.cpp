@@ -66,6 +66,8 @@ std::string resolved_case_toml(const Case& c) {
                    c.allow_large_run, c.checkpoint_interval, c.checkpoint_wall_interval);
   // (only when set: checkpoints of cases resolved before the key existed still match)
   if (c.contact_energy_limit != Case::kContactEnergyLimit) o += fmt::format("contact_energy_limit = {:.17g}\n", c.contact_energy_limit);
+  if (c.interface_energy_limit != Case::kInterfaceEnergyLimit)
+    o += fmt::format("interface_energy_limit = {:.17g}\n", c.interface_energy_limit);
   if (c.mass_scaling_dt > 0)
     o += fmt::format("mass_scaling_dt = {:.17g}\nmass_scaling_limit = {:.17g}\n", c.mass_scaling_dt,
                      c.mass_scaling_limit);

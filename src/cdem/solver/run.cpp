@@ -187,10 +187,10 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
                           m.sp_a[worst], describe_node(m, static_cast<std::size_t>(m.sp_a[worst])));
     }
     return fmt::format("at t = {:.6g} s (step {}): the interfaces made energy: their booked dissipation "
-                       "fell to {:.4g} J from {:.4g} J, more than {} x the energy put in ({:.4g} J).{} "
-                       "Lower simulation.dt_safety (simulation.interface_energy_limit = 0 turns this "
-                       "check off)",
-                       t, sim.steps(), e.fracture, fracture_peak, iface_limit, input, where);
+                       "fell by {:.4g} J below its peak ({:.6g} J), more than {} x the energy put in "
+                       "({:.4g} J).{} Lower simulation.dt_safety (simulation.interface_energy_limit = 0 "
+                       "turns this check off)",
+                       t, sim.steps(), fracture_peak - e.fracture, fracture_peak, iface_limit, input, where);
   }
   return {};
 }

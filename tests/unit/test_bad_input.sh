@@ -137,6 +137,7 @@ check typo_end_tme 2 "key 'simulation.end_tme'" "unknown key" "end_time"
 check dt_safety_above_one 2 "key 'simulation.dt_safety'" "(0, 1]" "got 1.5"
 check contact_energy_limit_negative 2 "key 'simulation.contact_energy_limit'" "expected a number >= 0"
 check interface_energy_limit_negative 2 "key 'simulation.interface_energy_limit'" "expected a number >= 0"
+check release_angle_above_180 2 "key 'simulation.release_angle'" "(0, 180]" "got 200"
 # mass scaling (simulation.mass_scaling_dt): negative, in the springs mode, with a fixed dt, a
 # limit above 0.1, and a step that needs more mass than the limit
 expect mass_scaling_negative 2 stderr good_2d.toml -- "$BIN" check "$D/good_2d.toml" --set simulation.mass_scaling_dt=-1e-6 -- \

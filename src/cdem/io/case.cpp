@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <numbers>
 #include <sstream>
 
 #include "cdem/core/error.hpp"
@@ -145,7 +146,7 @@ Case parse_case(std::string_view text, const std::string& path,
   const auto sim = top.sub("simulation");
   if (!sim) throw InputError(fmt::format("{}: missing table [simulation] (at least end_time)", path));
   sim->check_known({"end_time", "dt_safety", "dt", "threads", "output_interval", "output_times",
-                    "history_interval", "release_distance_factor", "energy_blowup_factor",
+                    "history_interval", "release_distance_factor", "release_angle", "energy_blowup_factor",
                     "contact_energy_limit", "interface_energy_limit", "max_steps", "gravity", "interfaces", "opened_stiffness", "mass_scaling_dt", "mass_scaling_limit",
                     "allow_large_run", "checkpoint_interval", "checkpoint_wall_interval"});
   c.end_time = sim->positive("end_time");
@@ -171,6 +172,14 @@ Case parse_case(std::string_view text, const std::string& path,
   drop_late_output_times(*sim, c);
   c.history_interval = sim->non_negative("history_interval", c.end_time / 200.0);
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
+  // The rotation counterpart of the release distance: a face turned by theta about the point
+  // moves its corners one block size away by ~theta x that size, so release_distance_factor
+  // radians releases at the same corner displacement (0.5 rad = 28.6 degrees).
+  c.release_angle = sim->positive("release_angle", c.release_distance_factor * 180.0 / std::numbers::pi);
+  if (c.release_angle > 180.0)
+    throw InputError(fmt::format("{}: expected an angle in degrees in (0, 180] (180: a broken pair "
+                                 "is released by distance only), got {}",
+                                 sim->where("release_angle"), c.release_angle));
   c.energy_blowup_factor = sim->positive("energy_blowup_factor", 10.0);
   c.contact_energy_limit = sim->non_negative("contact_energy_limit", Case::kContactEnergyLimit);
   c.interface_energy_limit = sim->non_negative("interface_energy_limit", Case::kInterfaceEnergyLimit);

@@ -1,6 +1,7 @@
 // A case file (TOML) parsed and validated into a Case before anything runs. Every error names
 // the file, the key and what was expected (InputError). See docs/case_reference.md.
 #pragma once
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -65,6 +66,9 @@ struct Case {
   std::vector<double> output_times;     // explicit field output times (added to the period)
   double history_interval = 0;          // monitors, energy, fracture degree, s (default end_time/200; 0: every step)
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
+  // degrees; a broken pair whose faces have turned apart by more than this is released (180:
+  // never); when not given, release_distance_factor radians (case.cpp)
+  double release_angle = 0.5 * 180.0 / std::numbers::pi;
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   static constexpr double kContactEnergyLimit = 0.02;
   double contact_energy_limit = kContactEnergyLimit;   // stop when contact has made more than this share of the

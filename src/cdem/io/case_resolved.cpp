@@ -56,12 +56,12 @@ std::string resolved_case_toml(const Case& c) {
   }
   o += fmt::format("\n[simulation]\nend_time = {:.17g}\ndt_safety = {:.17g}\ndt = {:.17g}\n"
                    "threads = {}\noutput_interval = {:.17g}\nhistory_interval = {:.17g}\n"
-                   "release_distance_factor = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
+                   "release_distance_factor = {:.17g}\nrelease_angle = {:.17g}\nenergy_blowup_factor = {:.17g}\n"
                    "max_steps = {}\ngravity = {}\ninterfaces = {}\nopened_stiffness = {:.17g}\n"
                    "allow_large_run = {}\ncheckpoint_interval = {:.17g}\n"
                    "checkpoint_wall_interval = {:.17g}\n",
                    c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
-                   c.history_interval, c.release_distance_factor, c.energy_blowup_factor,
+                   c.history_interval, c.release_distance_factor, c.release_angle, c.energy_blowup_factor,
                    c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness,
                    c.allow_large_run, c.checkpoint_interval, c.checkpoint_wall_interval);
   // (only when set: checkpoints of cases resolved before the key existed still match)

@@ -164,6 +164,9 @@ struct Model {
   std::vector<double> mat_lambda, mat_shear;   // Lame constants per block material (Pa)
   std::vector<double> mat_beta;                // stiffness-proportional damping per material (s)
   double release_distance_factor = 0.5;        // broken pair released beyond this x block size
+  // A broken pair is released too once its two faces have turned apart by more than the release
+  // angle: the cosine of that angle (-1: never, release by distance only; springs.cpp)
+  double release_cos = -1.0;
 
   // ---- regions and boundary facets (from the mesh) ----
   std::vector<std::string> region_names;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include "cdem/core/error.hpp"
@@ -22,6 +23,7 @@ namespace cdem {
 
 Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
+  m_.release_cos = c.release_angle >= 180.0 ? -1.0 : std::cos(c.release_angle * std::numbers::pi / 180.0);
   bc_ = prepare_boundaries(m_, c.boundaries, c.gravity, c.path);
   setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays

@@ -21,9 +21,11 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "cdem/mesh/element_geometry.hpp"
 #include "cdem/physics/springs.hpp"
 #include "cdem/physics/ties.hpp"
 #include "model_builders.hpp"
@@ -35,6 +37,7 @@ using namespace test_models;
 
 struct Counts {
   std::size_t broken = 0, released = 0, intact = 0;
+  std::size_t turned = 0;  // interfaces whose faces have turned past the release angle (end)
 };
 
 // The spring state of two models: the names of the arrays that differ in any bit.
@@ -81,6 +84,7 @@ Counts run_pair(bool three_d, InterfaceLaw law, bool preload, bool tied) {
   im.gs = 200;
   im.residual_friction_deg = 20;
   Model m = make_model(mesh, rock(), im);
+  m.release_cos = std::cos(0.5);  // the release angle's default (Simulation sets it from the case)
   // Pre-cracked interfaces and an optional preload offset.
   std::mt19937_64 gen(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -141,6 +145,13 @@ Counts run_pair(bool three_d, InterfaceLaw law, bool preload, bool tied) {
     c.broken += st == kBroken;
     c.released += st == kReleased;
   }
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    Vec3 pa[3], pb[3];
+    for (int q = 0; q < np; ++q) pa[q] = m.x[m.sp_a[i * np + q]], pb[q] = m.x[m.sp_b[i * np + q]];
+    const Vec3 aa = face_area_vector(std::span<const Vec3>(pa, np), np),
+               ab = face_area_vector(std::span<const Vec3>(pb, np), np);
+    c.turned += dot(aa, ab) < m.release_cos * std::sqrt(dot(aa, aa) * dot(ab, ab));
+  }
   return c;
 }
 
@@ -151,15 +162,17 @@ TEST(SpringKernel, VectorisedMatchesReferenceBitForBit) {
          {InterfaceLaw::Elastic, InterfaceLaw::MohrCoulomb, InterfaceLaw::FractureEnergy})
       for (bool preload : {false, true}) {
         const Counts c = run_pair(three_d, law, preload, tied);
-        std::printf("[spring kernel] %s %-7s %-15s %-9s intact %zu (step 1), broken %zu, released %zu (end)\n",
+        std::printf("[spring kernel] %s %-7s %-15s %-9s intact %zu (step 1), broken %zu, released %zu, "
+                    "interfaces turned past the release angle %zu (end)\n",
                     three_d ? "3D" : "2D", tied ? "tied" : "springs", name_of(law), preload ? "preload" : "",
-                    c.intact, c.broken, c.released);
+                    c.intact, c.broken, c.released, c.turned);
         // Every branch was taken: intact spring points after the first step, broken (in contact
         // or open) and released ones at the end (the elastic law's broken ones are the
         // pre-cracked).
         EXPECT_GT(c.intact, 0u);
         EXPECT_GT(c.broken, 0u);
         EXPECT_GT(c.released, 0u);
+        EXPECT_GT(c.turned, 0u);  // the release by angle (broken_release) is taken too
       }
 }
 

@@ -112,7 +112,8 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
   // grows, give or take the integration's error. One that falls by a good share of the energy
   // put in means spring points gave back far more work than they stored, and the balance still
   // closes (it is booked): in the coarse SPEC 5.3 scheme B, 5.8 MJ between two samples at
-  // 22.8 ms, fragments thrown at 5.6 km/s (docs/pile_pit_3d.md). The run stops.
+  // 22.8 ms, fragments thrown at 5.6 km/s (docs/pile_pit_3d.md), a broken point between two
+  // faces turned 177 degrees apart (what simulation.release_angle now releases). The run stops.
   if (iface_limit > 0 && e.fracture < fracture_peak - iface_limit * std::max(input, floor)) {
     // where: the spring point with the lowest booked dissipation
     const auto worst = static_cast<std::size_t>(
@@ -125,11 +126,17 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
                           worst, i, m.iface_block_a[i], m.iface_block_b[i], m.sp_dissipated[worst],
                           m.sp_a[worst], describe_node(m, static_cast<std::size_t>(m.sp_a[worst])));
     }
+    const std::string angle =
+        m.release_cos <= -1.0
+            ? " With simulation.release_angle = 180, broken points between faces turned apart are a "
+              "known cause: leave it at its default."
+            : "";
     return fmt::format("at t = {:.6g} s (step {}): the interfaces made energy: their booked dissipation "
                        "fell by {:.4g} J below its peak ({:.6g} J), more than {} x the energy put in "
-                       "({:.4g} J).{} Lower simulation.dt_safety (simulation.interface_energy_limit = 0 "
+                       "({:.4g} J).{}{} Lower simulation.dt_safety (simulation.interface_energy_limit = 0 "
                        "turns this check off)",
-                       t, sim.steps(), fracture_peak - e.fracture, fracture_peak, iface_limit, input, where);
+                       t, sim.steps(), fracture_peak - e.fracture, fracture_peak, iface_limit, input,
+                       where, angle);
   }
   return {};
 }

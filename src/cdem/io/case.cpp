@@ -17,6 +17,11 @@
 
 namespace cdem {
 
+double release_angle_of(const Case& c) {
+  return c.release_angle > 0 ? c.release_angle
+                             : std::min(180.0, c.release_distance_factor * 180.0 / std::numbers::pi);
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -172,10 +177,8 @@ Case parse_case(std::string_view text, const std::string& path,
   drop_late_output_times(*sim, c);
   c.history_interval = sim->non_negative("history_interval", c.end_time / 200.0);
   c.release_distance_factor = sim->positive("release_distance_factor", 0.5);
-  // The rotation counterpart of the release distance: a face turned by theta about the point
-  // moves its corners one block size away by ~theta x that size, so release_distance_factor
-  // radians releases at the same corner displacement (0.5 rad = 28.6 degrees).
-  c.release_angle = sim->positive("release_angle", c.release_distance_factor * 180.0 / std::numbers::pi);
+  // (not given: 0, the release distance as a rotation, release_angle_of)
+  c.release_angle = sim->has("release_angle") ? sim->positive("release_angle") : 0.0;
   if (c.release_angle > 180.0)
     throw InputError(fmt::format("{}: expected an angle in degrees in (0, 180] (180: a broken pair "
                                  "is released by distance only), got {}",

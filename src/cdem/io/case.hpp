@@ -1,7 +1,6 @@
 // A case file (TOML) parsed and validated into a Case before anything runs. Every error names
 // the file, the key and what was expected (InputError). See docs/case_reference.md.
 #pragma once
-#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -48,6 +47,12 @@ struct DelayGroup {
   bool per_deck = false;       // given as an array
 };
 
+struct Case;
+// The release angle in effect (degrees): simulation.release_angle, or when not given the release
+// distance as a rotation, release_distance_factor radians (a face turned by theta about the point
+// moves its corners one block size away by ~theta x that size), at most 180.
+double release_angle_of(const Case& c);
+
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
   std::string dir;          // its directory
@@ -67,8 +72,8 @@ struct Case {
   double history_interval = 0;          // monitors, energy, fracture degree, s (default end_time/200; 0: every step)
   double release_distance_factor = 0.5; // broken pair released beyond this x block size
   // degrees; a broken pair whose faces have turned apart by more than this is released (180:
-  // never); when not given, release_distance_factor radians (case.cpp)
-  double release_angle = 0.5 * 180.0 / std::numbers::pi;
+  // never); <= 0 (not given): release_distance_factor radians, at most 180 (release_angle_of)
+  double release_angle = 0;
   double energy_blowup_factor = 10.0;   // stop when total energy > this x (input work + initial)
   static constexpr double kContactEnergyLimit = 0.02;
   double contact_energy_limit = kContactEnergyLimit;   // stop when contact has made more than this share of the

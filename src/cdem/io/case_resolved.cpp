@@ -61,7 +61,7 @@ std::string resolved_case_toml(const Case& c) {
                    "allow_large_run = {}\ncheckpoint_interval = {:.17g}\n"
                    "checkpoint_wall_interval = {:.17g}\n",
                    c.end_time, c.dt_safety, c.fixed_dt, c.threads, c.output_interval,
-                   c.history_interval, c.release_distance_factor, c.release_angle, c.energy_blowup_factor,
+                   c.history_interval, c.release_distance_factor, release_angle_of(c), c.energy_blowup_factor,
                    c.max_steps, vec_str(c.gravity), q(name_of(c.interface_mode)), c.opened_stiffness,
                    c.allow_large_run, c.checkpoint_interval, c.checkpoint_wall_interval);
   // (only when set: checkpoints of cases resolved before the key existed still match)

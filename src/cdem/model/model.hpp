@@ -8,6 +8,7 @@
 // consecutive spring points (2 in 2D, 3 in 3D): spring s belongs to interface
 // s / springs_per_iface, and its node_a lies in block A, node_b in block B.
 #pragma once
+#include <limits>
 #include <algorithm>
 #include <cstdint>
 #include <string>
@@ -165,8 +166,8 @@ struct Model {
   std::vector<double> mat_beta;                // stiffness-proportional damping per material (s)
   double release_distance_factor = 0.5;        // broken pair released beyond this x block size
   // A broken pair is released too once its two faces have turned apart by more than the release
-  // angle: the cosine of that angle (-1: never, release by distance only; springs.cpp)
-  double release_cos = -1.0;
+  // angle: the cosine of that angle (-inf: never, release by distance only; springs.cpp)
+  double release_cos = -std::numeric_limits<double>::infinity();
 
   // ---- regions and boundary facets (from the mesh) ----
   std::vector<std::string> region_names;

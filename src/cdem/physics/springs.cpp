@@ -34,10 +34,12 @@ inline void cap_shear(Vec3& fs, double cap) {
 // sides that sum cancels and its direction is rounding: coarse SPEC 5.3 scheme B had two
 // tumbling tets with faces 177 degrees apart whose last broken point, pushed along such a
 // normal, made 5.8 MJ in 15 steps (docs/verification_contact.md). General contact takes over.
+// (The distance is computed unconditionally: a conditional load of block_size left one of the
+// chunk's gather loops scalar.)
 inline double broken_release(const Model& m, std::int64_t i, double ab, double aa2, double ab2) {
-  if (ab < m.release_cos * std::sqrt(aa2 * ab2)) return -1.0;
-  return m.release_distance_factor * 0.5 *
-         (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+  const double rd = m.release_distance_factor * 0.5 *
+                    (m.block_size[m.iface_block_a[i]] + m.block_size[m.iface_block_b[i]]);
+  return ab < m.release_cos * std::sqrt(aa2 * ab2) ? -1.0 : rd;
 }
 
 void break_spring(SpringPoint& sp, std::uint8_t mode, double t) {
@@ -134,6 +136,13 @@ Vec3 update_spring_point(SpringPoint& sp, const SpringLaw& law, Vec3 d, Vec3 du,
       case InterfaceLaw::Elastic: sp.fn = sp.kn * dn; break;
       case InterfaceLaw::MohrCoulomb: mohr_coulomb(sp, law, dn, t); break;
       case InterfaceLaw::FractureEnergy: fracture_energy(sp, law, dn, t); break;
+    }
+    // broken now between faces turned apart (release_distance < 0, broken_release): released at
+    // once, not pushed along their mean normal for a step
+    if (sp.state == kBroken && release_distance < 0) {
+      sp.state = kReleased;
+      sp.fn = 0;
+      sp.fs = {};
     }
   }
   const Vec3 force = sp.fn * n + sp.fs;

@@ -127,7 +127,7 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
                           m.sp_a[worst], describe_node(m, static_cast<std::size_t>(m.sp_a[worst])));
     }
     const std::string angle =
-        m.release_cos <= -1.0
+        m.release_cos < -1.0
             ? " With simulation.release_angle = 180, broken points between faces turned apart are a "
               "known cause: leave it at its default."
             : "";

@@ -23,7 +23,10 @@ namespace cdem {
 
 Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
-  m_.release_cos = c.release_angle >= 180.0 ? -1.0 : std::cos(c.release_angle * std::numbers::pi / 180.0);
+  // (180: never, not cos 180 = -1, which rounding can pass for faces facing exactly opposite)
+  const double angle = release_angle_of(c);
+  m_.release_cos = angle >= 180.0 ? -std::numeric_limits<double>::infinity()
+                                  : std::cos(angle * std::numbers::pi / 180.0);
   bc_ = prepare_boundaries(m_, c.boundaries, c.gravity, c.path);
   setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays

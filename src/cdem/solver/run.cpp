@@ -75,6 +75,16 @@ Model build_case_model(const Case& c, const Mesh& mesh) {
   return build_model(mesh, c.materials, c.interfaces, c.path);
 }
 
+// (run.hpp)
+std::string upgrade_signature(std::string sig) {
+  if (sig.find("\nrelease_angle = ") == std::string::npos) {
+    const auto p = sig.find("\nrelease_distance_factor = ");
+    const auto e = p == std::string::npos ? p : sig.find('\n', p + 1);
+    if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
+  }
+  return sig;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -228,19 +238,6 @@ StateArchive load_last_checkpoint(const std::string& dir, bool quiet,
     }
   }
   throw InputError(fmt::format("{} {}: no readable checkpoint:{}", option, dir, why));
-}
-
-// A checkpoint written before a case key existed has no line for it in its signature: the
-// line is put in with the value that reproduces the code that wrote it, so that the restart
-// compares like with like (and `--set` of that value restarts it). simulation.release_angle
-// (6 Dec 2026): before it, broken points were released by distance only, as 180 does.
-std::string upgrade_signature(std::string sig) {
-  if (sig.find("\nrelease_angle = ") == std::string::npos) {
-    const auto p = sig.find("\nrelease_distance_factor = ");
-    const auto e = p == std::string::npos ? p : sig.find('\n', p + 1);
-    if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
-  }
-  return sig;
 }
 
 // The checkpoint's case against this one: only the schedule keys may differ.

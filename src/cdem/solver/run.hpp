@@ -29,6 +29,13 @@ struct RunResult {
   std::int64_t steps = 0;
 };
 
+// A checkpoint's case signature (its resolved case, schedule keys fixed) as the code that wrote
+// it meant it: a checkpoint written before a case key existed has no line for it, and the line is
+// put in with the value that reproduces that code, so that a restart compares like with like
+// (and `--set` of that value restarts it). simulation.release_angle (6 Dec 2026): before it,
+// broken points were released by distance only, as 180 does.
+std::string upgrade_signature(std::string sig);
+
 // Meshing: read the case's mesh file or generate its geometry (both sized against the cap
 // and this machine's memory, mesh_estimate.hpp).
 Mesh load_mesh(const Case& c);

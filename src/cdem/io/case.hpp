@@ -47,12 +47,6 @@ struct DelayGroup {
   bool per_deck = false;       // given as an array
 };
 
-struct Case;
-// The release angle in effect (degrees): simulation.release_angle, or when not given the release
-// distance as a rotation, release_distance_factor radians (a face turned by theta about the point
-// moves its corners one block size away by ~theta x that size), at most 180.
-double release_angle_of(const Case& c);
-
 struct Case {
   std::string path;         // the case file (for messages and relative paths)
   std::string dir;          // its directory
@@ -110,6 +104,11 @@ struct Case {
     return nullptr;
   }
 };
+
+// The release angle in effect (degrees): simulation.release_angle, or when not given the release
+// distance as a rotation, release_distance_factor radians (a face turned by theta about the point
+// moves its corners one block size away by ~theta x that size), at most 180.
+double release_angle_of(const Case& c);
 
 // Parse and validate. `overrides` are "dotted.key=value" strings applied on top of the file
 // (the value is TOML: 3e-3, "text", [1, 2]). Throws InputError. The file must be a regular file

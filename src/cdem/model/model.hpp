@@ -8,9 +8,9 @@
 // consecutive spring points (2 in 2D, 3 in 3D): spring s belongs to interface
 // s / springs_per_iface, and its node_a lies in block A, node_b in block B.
 #pragma once
-#include <limits>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 

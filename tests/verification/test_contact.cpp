@@ -381,31 +381,58 @@ TEST(ContactFast, FragmentAt200MetresPerSecond) {
 
 // The rebuild trigger itself: a candidate node moved by 0.49 skin leaves the list; by 0.51 skin
 // it is rebuilt at the next contact_forces call; released points rebuild once the relative
-// motion bound since the release passes 0.1 skin.
+// motion bound since the release passes 0.1 skin: the bound of the nodes near the released
+// block (within 2 skins of its box), or, for all others, 2.1 skins of 2 max|v| dt
+// (contact_release.cpp).
 TEST(ContactFast, RebuildTrigger) {
   const auto mat = rock();
   const auto glue = interface_of(InterfaceLaw::Elastic);
-  Model m = make_model(tet_box(2, 2, 2, 1, 1, 1), mat, glue);
+  // a 4 x 1 x 1 m bar of 1 m cubes, 6 tetrahedra each: its two ends are 2 m apart
+  Model m = make_model(tet_box(4, 1, 1, 4, 1, 1), mat, glue);
   ContactSettings cfg;
   cfg.enabled = true;
   cfg.skin = 0.01;
   ContactSet cs = setup_contact(m, cfg, 1.0, 1e10);
   contact_forces(m, cs, 1e-6);
   ASSERT_EQ(cs.rebuilds, 1);
-  const std::int32_t n = cs.cand_nodes.front();
+  // n: a candidate node at the x = 0 end
+  std::int32_t n = -1;
+  for (const std::int32_t c : cs.cand_nodes)
+    if (m.x[c].x < 1e-9) n = c;
+  ASSERT_GE(n, 0);
   m.x[n].x += 0.49 * cfg.skin;
   contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 1);
   m.x[n].x += 0.02 * cfg.skin;  // now 0.51 skin from where it was at the build
   contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 2);
-  // A released point: its faces become candidates once the nodes may have moved towards each
-  // other by 0.1 skin since (2 max|v| dt per step). At rest: no rebuild, whatever the steps.
-  ++m.released_points;
+  // a point released on an interface: of n's block, or of two blocks beyond x = 3 m
+  auto release_point = [&](bool near_n) {
+    const std::int32_t bn = m.node_block(static_cast<std::size_t>(n));
+    for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+      const std::int32_t a = m.iface_block_a[i], b = m.iface_block_b[i];
+      bool far = true;
+      for (const std::int32_t k : {a, b}) {
+        Vec3 lo, hi;
+        m.block_box(static_cast<std::size_t>(k), lo, hi);
+        far = far && lo.x > 3.0 - 1e-9;
+      }
+      const std::size_t sp = i * static_cast<std::size_t>(m.springs_per_iface);
+      if ((near_n ? (a == bn || b == bn) : far) && m.sp_state[sp] != kReleased) {
+        m.sp_state[sp] = kReleased;
+        ++m.released_points;
+        return;
+      }
+    }
+    FAIL() << "no interface to release";
+  };
+  // At rest: no rebuild, whatever the steps.
+  release_point(true);
   for (int k = 0; k < 5; ++k) contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 2);
-  // Moving at 100 m/s, dt = 1e-6 s: 2e-4 m = 0.02 skin per step: 0.10 skin after 5 steps, beyond
-  // at the 6th (the bound may have grown by a hair less than 0.1 skin at the 5th by rounding).
+  // n moving at 100 m/s, dt = 1e-6 s: 2e-4 m = 0.02 skin per step: 0.10 skin after 5 steps,
+  // beyond at the 6th (the bound may have grown by a hair less than 0.1 skin at the 5th by
+  // rounding).
   for (std::size_t q = 0; q < m.n_nodes(); ++q) m.v[q] = Vec3{0.0, 0.0, 0.0};
   m.v[n] = Vec3{100.0, 0.0, 0.0};
   for (int k = 0; k < 4; ++k) contact_forces(m, cs, 1e-6);
@@ -414,6 +441,51 @@ TEST(ContactFast, RebuildTrigger) {
   contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 3) << "not rebuilt once the nodes could have moved 0.1 skin";
   EXPECT_EQ(cs.release_drift, 0.0);
+  // A point released 2 m from n, the blocks near it at rest: n is no nearer than 2 m - 0.02 m
+  // after 99 steps (2.08 skins of 2 max|v| dt: n and the released faces approach by at most
+  // that), so no rebuild; the far bound passes 2.1 skins at the 106th step.
+  release_point(false);
+  for (int k = 0; k < 100; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 3) << "a fast node 2 m away rebuilt the pairs of a released block";
+  EXPECT_EQ(cs.release_drift, 0.0) << "the released block's neighbourhood is at rest";
+  for (int k = 0; k < 10; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 4) << "not rebuilt once any node could have reached the released faces";
+  // A checkpoint written before the neighbourhood existed (no near marks): the old rule, the
+  // fastest node anywhere, until the next build.
+  release_point(false);
+  contact_forces(m, cs, 1e-6);
+  cs.grp_near.clear();
+  for (int k = 0; k < 4; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 4);
+  contact_forces(m, cs, 1e-6);
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 5) << "the old rule: rebuilt once any node could have moved 0.1 skin";
+  // A release that splits the body in two (every point of every interface across x = 3 m), 2 m
+  // from n: the two parts' nodes and blocks may pair anywhere they touch, so the old rule.
+  contact_forces(m, cs, 1e-6);
+  for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+    Vec3 la, ha, lb, hb;
+    m.block_box(static_cast<std::size_t>(m.iface_block_a[i]), la, ha);
+    m.block_box(static_cast<std::size_t>(m.iface_block_b[i]), lb, hb);
+    if (std::min(la.x, lb.x) > 3.0 - 1e-9 || std::max(ha.x, hb.x) < 3.0 + 1e-9) continue;  // (one side)
+    for (int q = 0; q < m.springs_per_iface; ++q) {
+      const std::size_t sp = i * static_cast<std::size_t>(m.springs_per_iface) + static_cast<std::size_t>(q);
+      if (m.sp_state[sp] != kReleased) m.sp_state[sp] = kReleased, ++m.released_points;
+    }
+  }
+  for (int k = 0; k < 4; ++k) contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 5);
+  contact_forces(m, cs, 1e-6);
+  contact_forces(m, cs, 1e-6);
+  EXPECT_EQ(cs.rebuilds, 6) << "a release that splits a body: the old rule";
+  std::int32_t far_block = -1;
+  for (std::size_t b = 0; b < m.n_blocks(); ++b) {
+    Vec3 lo, hi;
+    m.block_box(b, lo, hi);
+    if (lo.x > 3.0 - 1e-9) far_block = static_cast<std::int32_t>(b);
+  }
+  ASSERT_GE(far_block, 0);
+  EXPECT_NE(cs.body[m.node_block(static_cast<std::size_t>(n))], cs.body[far_block]) << "the body was not split";
 }
 
 // Each block's own skin (the default, skin = 0): a graded pair of bodies, a coarse 1 m cube of

@@ -54,6 +54,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   // most this (10 % of the skin); a breaking model releases points nearly every step, and a
   // rebuild at each cost most of its step.
   constexpr double kReleaseDrift = 0.1;
+  // A node farther than this x skin from a block at the step its points are released reaches its
+  // faces only after 2 max|v| dt has summed past it: the nearer ones decide the rebuild
+  // (contact_release.cpp).
+  constexpr double kReleaseFar = 2.0;
   // The nodes' motion this step, in one pass over the nodes that can take part in contact (a
   // solid charge's explosive blocks are left out: their products, often the fastest nodes, would
   // trigger rebuilds for nothing): each node's path length since the build (the bound on how far
@@ -66,19 +70,25 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     const auto ngrp = static_cast<std::int64_t>(cs.grp_speed.size());
     const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
     static LoopSplit split_speed;
+    const bool boxes = release_pending && cs.grp_lo.size() == static_cast<std::size_t>(ngrp);
     vmax = split_speed.run_reduce(ngrp, 0.0, [&](const LoopSplit::Range& part) {
       double v_top = 0;
+      constexpr double inf = std::numeric_limits<double>::infinity();
       for (std::int64_t g = part.lo; g < part.hi; ++g) {
         double vg = 0;  // (the group's largest speed: the sleep's local clocks, below)
+        Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};  // (its box: the release trigger's)
         for (std::int64_t b = g * kSleepGroup; b < std::min(nbk, (g + 1) * kSleepGroup); ++b) {
           if (skip && skip[b]) continue;
           for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
             const double vn = std::sqrt(dot(m.v[n], m.v[n]));
             cs.node_drift[n] += vn * dt;
             vg = std::max(vg, vn);
+            if (boxes)
+              for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], m.x[n][d]), hi[d] = std::max(hi[d], m.x[n][d]);
           }
         }
         cs.grp_speed[g] = vg;
+        if (boxes) cs.grp_lo[g] = lo, cs.grp_hi[g] = hi;
         v_top = std::max(v_top, vg);
       }
       return v_top;
@@ -86,8 +96,10 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   }
   bool due = first_build || cs.rebuild_due;
   if (release_pending) {
-    cs.release_drift += 2.0 * vmax * dt;
-    due = cs.release_drift > kReleaseDrift * cs.skin;
+    const double vnear = release_near_speed(m, cs, kReleaseFar * cs.skin);
+    cs.release_drift += 2.0 * vnear * dt;
+    cs.release_drift_far += 2.0 * vmax * dt;
+    due = cs.release_drift > kReleaseDrift * cs.skin || cs.release_drift_far > (kReleaseDrift + kReleaseFar) * cs.skin;
   }
   if (!due) {
     // (the candidate nodes, then the candidate blocks' other nodes)

@@ -235,8 +235,20 @@ struct ContactSet {
 
   // ---- state and statistics ----
   std::int64_t released_seen = -1;       // Model::released_points at the last build
-  double release_drift = 0;              // since points were released after the last build:
-                                         // the bound sum 2 max|v| dt on any relative motion (m)
+  // Since points were released after the last build (contact_release.cpp): the bound sum on the
+  // relative motion of the near groups' nodes (2 v_near dt) and of any node (2 max|v| dt) (m)
+  double release_drift = 0, release_drift_far = 0;
+  // The release trigger's neighbourhood (contact_release.cpp): per block the released points on
+  // its interfaces at the last look, and 1 when it lay within kReleaseFar x skin of a block
+  // released since the build; per group of kSleepGroup blocks its box this step (the speed pass,
+  // contact.cpp) and 1 when it holds a near block; per group the box of its blocks released at
+  // this look, and the groups that have one
+  std::vector<std::uint8_t> blk_released, blk_near, grp_near;
+  std::vector<std::uint8_t> ifc_free;  // per interface: 1 when all its points are released
+  std::vector<Vec3> grp_lo, grp_hi, rel_lo, rel_hi;
+  std::vector<std::int32_t> rel_groups;
+  std::vector<std::int32_t> join_queue, join_hash;  // scratch of the split test
+  std::int64_t released_looked = -1;     // Model::released_points at the last look
   double diss_closed = 0;                // dissipation of pairs dropped at rebuilds (J)
   std::int64_t rebuilds = 0, active = 0, active_max = 0;
   // geometric tests done so far: node-block pairs (sphere and planes), block pairs (edges); the
@@ -278,6 +290,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt);
 // The broad phase (contact_broad_phase.cpp): the candidate faces and the (node, block) pairs
 // anew, the state of the pairs that persist carried over; then index_pairs.
 void rebuild_contact_pairs(Model& m, ContactSet& cs);
+
+// The release trigger (contact_release.cpp). reset_release_trigger: at each build, every
+// released point seen, no group near. release_near_speed: looks at the blocks released since the
+// last look (when Model::released_points changed), marks the blocks whose boxes lie within
+// `reach` of theirs (needs grp_lo, grp_hi: this step's), and returns the largest speed of the
+// nodes of the blocks marked so far.
+// sync_release_counts: the per-block released counts and the per-interface free flags of the
+// present state (also after a checkpoint is loaded: they are not stored).
+void reset_release_trigger(const Model& m, ContactSet& cs);
+void sync_release_counts(const Model& m, ContactSet& cs);
+double release_near_speed(const Model& m, ContactSet& cs, double reach);
 
 // Rebuilds what is derived from the pairs (the distinct blocks, the step's work lists, their
 // capacities): at every rebuild, and after the pairs were loaded from a checkpoint.

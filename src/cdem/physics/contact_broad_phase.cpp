@@ -313,6 +313,7 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   index_pairs(m, cs);
   cs.released_seen = m.released_points;
   cs.release_drift = 0;
+  reset_release_trigger(m, cs);
   cs.rebuild_due = false;
 }
 

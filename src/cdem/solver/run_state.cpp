@@ -84,6 +84,21 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.face_cand", cs.face_cand);
   ar.io("contact.released_seen", cs.released_seen);
   ar.io("contact.release_drift", cs.release_drift);
+  // the release trigger's neighbourhood (absent in checkpoints written before it: every group
+  // near until the next build, the old rule; contact_release.cpp)
+  if (!ar.loading() || ar.has("contact.grp_near")) {
+    ar.io("contact.release_drift_far", cs.release_drift_far);
+    ar.io("contact.blk_near", cs.blk_near);
+    ar.io("contact.grp_near", cs.grp_near);
+    if (ar.loading()) {
+      // (the released counts are the state's: Simulation::io_state recomputes them)
+      const std::size_t ng = cs.grp_near.size();
+      for (auto* v : {&cs.grp_lo, &cs.grp_hi, &cs.rel_lo, &cs.rel_hi}) v->resize(ng);
+      cs.rel_groups.reserve(ng);
+    }
+  } else {
+    cs.grp_near.clear();
+  }
   ar.io("contact.diss_closed", cs.diss_closed);
   ar.io("contact.rebuilds", cs.rebuilds);
   ar.io("contact.active", cs.active);

@@ -489,6 +489,9 @@ void Simulation::io_state(StateArchive& ar) {
   if (ar.loading() && contact_.enabled) {
     index_pairs(m_, contact_);
     reset_contact_sleep(m_, contact_);
+    // (the release trigger's counts: the state's, as when the checkpoint was written, after its
+    // step's look; contact_release.cpp)
+    sync_release_counts(m_, contact_);
   }
   ar.io("sim.t", t_);
   ar.io("sim.dt", dt_);

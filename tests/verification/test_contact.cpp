@@ -372,6 +372,21 @@ void fast_fragment(double skin) {
               static_cast<long long>(sim.steps()), v0 * sim.dt(), lead, bound, f.v.x);
   EXPECT_LT(lead, bound);
   EXPECT_LT(f.v.x, 0.0);
+  if (skin == 0.0) {
+    // each block's own skin: the fragment's raised at the first build (all its nodes at v0) to
+    // what it covers in kSkinSteps steps, at most kSkinCap reference skins; the wall's as set up
+    const ContactSet& cs = sim.contact();
+    EXPECT_EQ(cs.rebuilds, 1);
+    int raised = 0;
+    for (std::size_t b = 0; b < sim.model().n_blocks(); ++b) {
+      const double want = sim.model().block_region[b] == 1
+                              ? std::max(cs.half_skin0[b], std::min(v0 * kSkinSteps * sim.dt(), kSkinCap * cs.skin))
+                              : cs.half_skin0[b];
+      EXPECT_DOUBLE_EQ(cs.half_skin[b], want) << "block " << b;
+      raised += cs.half_skin[b] > cs.half_skin0[b];
+    }
+    EXPECT_EQ(raised, 6) << "the fragment's six tetrahedra";
+  }
 }
 
 TEST(ContactFast, FragmentAt200MetresPerSecond) {

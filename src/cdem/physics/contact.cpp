@@ -47,6 +47,7 @@ constexpr double kOffFace = 0.5;
 
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
+  cs.dt = dt;
   // Rebuild when a candidate node has moved more than half its skin, or when points were released
   // (their faces become candidates) once the nodes may have moved towards each other by
   // kReleaseDrift x skin since the release: at most 2 max|v| dt per step. Until then no node

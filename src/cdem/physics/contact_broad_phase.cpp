@@ -64,6 +64,20 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   const std::vector<std::int32_t>& old_node = cs.pair_node_prev;
   const std::vector<std::int32_t>& old_face = cs.pair_block_prev;
   if (cs.node_drift.size() != m.n_nodes()) reset_contact_sleep(m, cs);  // (the first build)
+  // 0. The half skins: each block's own (no skin asked), raised for a fast block to what it
+  // covers in kSkinSteps steps at its present speed (at most kSkinCap x skin). A pair is listed
+  // when the node lies within sigma_n + sigma_b of the block's box and the list is rebuilt once a
+  // node has moved more than its sigma, whatever the sigmas: a larger one for a block that flies
+  // only lists its pairs farther out, and its nodes trigger the next build later.
+  if (cs.cfg.skin <= 0 && cs.half_skin0.size() == nb && cs.dt > 0) {
+    const double per_speed = kSkinSteps * cs.dt, cap = kSkinCap * cs.skin;
+#pragma omp parallel for schedule(static)
+    for (std::int64_t b = 0; b < static_cast<std::int64_t>(nb); ++b) {
+      double v2 = 0;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) v2 = std::max(v2, dot(m.v[n], m.v[n]));
+      cs.half_skin[b] = std::max(cs.half_skin0[b], std::min(std::sqrt(v2) * per_speed, cap));
+    }
+  }
   // 1. Bodies: blocks connected through points that are not released.
   cs.body.resize(nb);
   std::iota(cs.body.begin(), cs.body.end(), 0);

@@ -123,6 +123,7 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
     cs.half_skin.resize(nb);
     for (std::size_t b = 0; b < nb; ++b) cs.half_skin[b] = 0.125 * block_extent(m, b);
   }
+  cs.half_skin0 = cs.half_skin;
   return cs;
 }
 
@@ -181,7 +182,7 @@ double contact_dissipated(const ContactSet& cs) {
 
 std::size_t contact_bytes(const ContactSet& cs) {
   auto b = [](const auto&... v) { return ((v.capacity() * sizeof(v[0])) + ... + std::size_t{0}); };
-  return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.half_skin, cs.cand_lim2, cs.watch_nodes, cs.watch_x, cs.watch_lim2, cs.pair_node,
+  return b(cs.face_iface, cs.kc, cs.mu, cs.cand_faces, cs.cand_nodes, cs.x_build, cs.half_skin, cs.half_skin0, cs.cand_lim2, cs.watch_nodes, cs.watch_x, cs.watch_lim2, cs.pair_node,
            cs.pair_block, cs.pair_node_prev, cs.pair_block_prev, cs.pair_from, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,

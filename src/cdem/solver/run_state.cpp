@@ -56,6 +56,12 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.cand_faces", cs.cand_faces);
   ar.io("contact.cand_nodes", cs.cand_nodes);
   ar.io("contact.x_build", cs.x_build);
+  // the half skins of the last build (absent in checkpoints written before fast blocks had larger
+  // ones: the set-up's, as then) and the last step
+  if (!ar.loading() || ar.has("contact.half_skin")) {
+    ar.io("contact.half_skin", cs.half_skin);
+    ar.io("contact.dt", cs.dt);
+  }
   // the trigger's other nodes (absent in checkpoints written before each block had its own skin:
   // their list was built on one skin, so it is rebuilt at the next step)
   if (!ar.loading() || ar.has("contact.watch_x")) {

@@ -469,7 +469,7 @@ TEST(ContactFast, RebuildTrigger) {
   // fastest node anywhere, until the next build.
   release_point(false);
   contact_forces(m, cs, 1e-6);
-  cs.grp_near.clear();
+  cs.blk_near.clear();
   for (int k = 0; k < 4; ++k) contact_forces(m, cs, 1e-6);
   EXPECT_EQ(cs.rebuilds, 4);
   contact_forces(m, cs, 1e-6);

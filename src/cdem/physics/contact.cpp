@@ -47,7 +47,6 @@ constexpr double kOffFace = 0.5;
 
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
-  cs.dt = dt;
   // Rebuild when a candidate node has moved more than half its skin, or when points were released
   // (their faces become candidates) once the nodes may have moved towards each other by
   // kReleaseDrift x skin since the release: at most 2 max|v| dt per step. Until then no node
@@ -117,7 +116,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     };
     due = moved(cs.cand_nodes, cs.x_build, cs.cand_lim2) || moved(cs.watch_nodes, cs.watch_x, cs.watch_lim2);
   }
-  if (due) rebuild_contact_pairs(m, cs);
+  if (due) rebuild_contact_pairs(m, cs, dt);
   // The groups' clocks: each grows by the largest |v| dt of its own nodes and of its pairs'
   // blocks (the groups listed at the rebuild: those of every pair now), whether or not the pairs
   // were rebuilt (the pairs that stay keep their wakes, contact_broad_phase.cpp).

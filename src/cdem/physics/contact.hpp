@@ -114,9 +114,8 @@ struct ContactSet {
   // The set-up's half skins; by default (no skin asked) a fast block's half skin is raised at
   // each rebuild to the distance it covers in kSkinSteps steps at its speed then, at most
   // kSkinCap x skin (contact_broad_phase.cpp): one small fragment flying at 400 m/s rebuilt the
-  // fine SPEC 5.3 cylinder's pairs every 30 steps. `dt` is the last step's, for that.
+  // fine SPEC 5.3 cylinder's pairs every 30 steps.
   std::vector<double> half_skin0;
-  double dt = 0;
   int dim = 0;
   // per block face slot 4 b + k (k < 4): the interface it belongs to, -1 for a boundary face
   std::vector<std::int32_t> face_iface;
@@ -247,9 +246,9 @@ struct ContactSet {
   // The release trigger's neighbourhood (contact_release.cpp): per block the released points on
   // its interfaces at the last look, and 1 when it lay within kReleaseFar x skin of a block
   // released since the build; per group of kSleepGroup blocks its box this step (the speed pass,
-  // contact.cpp) and 1 when it holds a near block; per group the box of its blocks released at
-  // this look, and the groups that have one
-  std::vector<std::uint8_t> blk_released, blk_near, grp_near;
+  // contact.cpp); per group the box of its blocks released at this look, and the groups that
+  // have one
+  std::vector<std::uint8_t> blk_released, blk_near;
   std::vector<std::uint8_t> ifc_free;  // per interface: 1 when all its points are released
   std::vector<Vec3> grp_lo, grp_hi, rel_lo, rel_hi;
   std::vector<std::int32_t> rel_groups;
@@ -299,11 +298,12 @@ ContactSet setup_contact(const Model& m, const ContactSettings& cfg, double eta,
 void contact_forces(Model& m, ContactSet& cs, double dt);
 
 // The broad phase (contact_broad_phase.cpp): the candidate faces and the (node, block) pairs
-// anew, the state of the pairs that persist carried over; then index_pairs.
-void rebuild_contact_pairs(Model& m, ContactSet& cs);
+// anew, the state of the pairs that persist carried over; then index_pairs. dt: the step (the
+// fast blocks' half skins).
+void rebuild_contact_pairs(Model& m, ContactSet& cs, double dt);
 
 // The release trigger (contact_release.cpp). reset_release_trigger: at each build, every
-// released point seen, no group near. release_near_speed: looks at the blocks released since the
+// released point seen, no block near. release_near_speed: looks at the blocks released since the
 // last look (when Model::released_points changed), marks the blocks whose boxes lie within
 // `reach` of theirs (needs grp_lo, grp_hi: this step's), and returns the largest speed of the
 // nodes of the blocks marked so far.

@@ -54,7 +54,7 @@ inline std::uint64_t cell_hash(std::int64_t i, std::int64_t j, std::int64_t k) {
 
 }  // namespace
 
-void rebuild_contact_pairs(Model& m, ContactSet& cs) {
+void rebuild_contact_pairs(Model& m, ContactSet& cs, double dt) {
   const std::size_t nb = m.n_blocks(), ni = m.n_ifaces();
   const int np = m.springs_per_iface;
   ++cs.rebuilds;
@@ -69,8 +69,8 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs) {
   // when the node lies within sigma_n + sigma_b of the block's box and the list is rebuilt once a
   // node has moved more than its sigma, whatever the sigmas: a larger one for a block that flies
   // only lists its pairs farther out, and its nodes trigger the next build later.
-  if (cs.cfg.skin <= 0 && cs.half_skin0.size() == nb && cs.dt > 0) {
-    const double per_speed = kSkinSteps * cs.dt, cap = kSkinCap * cs.skin;
+  if (cs.cfg.skin <= 0 && cs.half_skin0.size() == nb && dt > 0) {
+    const double per_speed = kSkinSteps * dt, cap = kSkinCap * cs.skin;
 #pragma omp parallel for schedule(static)
     for (std::int64_t b = 0; b < static_cast<std::int64_t>(nb); ++b) {
       double v2 = 0;

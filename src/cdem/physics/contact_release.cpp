@@ -37,13 +37,15 @@
 namespace cdem {
 namespace {
 
+// The interface of an entry of Model::block_iface_list (i + 1 when the block is A, -(i + 1) when B).
+inline std::size_t iface_of(std::int32_t code) { return static_cast<std::size_t>(code > 0 ? code - 1 : -code - 1); }
+
 // Released spring points on the interfaces of block b (at most 6 faces x a few points: a byte).
 std::uint8_t released_on_block(const Model& m, std::int32_t b) {
   const int np = m.springs_per_iface;
   int count = 0;
   for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
-    const std::int32_t code = m.block_iface_list[e];
-    const std::size_t i = static_cast<std::size_t>(code > 0 ? code - 1 : -code - 1);
+    const std::size_t i = iface_of(m.block_iface_list[e]);
     for (int q = 0; q < np; ++q) count += m.sp_state[i * np + q] == kReleased;
   }
   return static_cast<std::uint8_t>(std::min(count, 255));
@@ -83,7 +85,7 @@ int still_joined(const Model& m, std::int32_t a, std::int32_t b, std::int32_t* q
     const std::int32_t k = queue[head++];
     for (auto e = m.block_iface_offset[k]; e < m.block_iface_offset[k + 1]; ++e) {
       const std::int32_t code = m.block_iface_list[e];
-      const auto i = static_cast<std::size_t>(code > 0 ? code - 1 : -code - 1);
+      const std::size_t i = iface_of(code);
       if (fully_released(m, i)) continue;
       const std::int32_t other = code > 0 ? m.iface_block_b[i] : m.iface_block_a[i];
       if (other == b) return 1;
@@ -111,7 +113,11 @@ void sync_release_counts(const Model& m, ContactSet& cs) {
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < ni; ++i) cs.ifc_free[i] = fully_released(m, static_cast<std::size_t>(i));
   cs.released_looked = m.released_points;
-  cs.join_queue.reserve(kJoinSearch);  // (the split test's scratch: a step allocates nothing)
+  // (the per-group boxes and the split test's scratch: a step allocates nothing)
+  const std::size_t ng = cs.grp_speed.size();
+  for (auto* v : {&cs.grp_lo, &cs.grp_hi, &cs.rel_lo, &cs.rel_hi}) v->resize(ng);
+  cs.rel_groups.reserve(std::max<std::size_t>(ng, kMaxReleaseGroups));
+  cs.join_queue.reserve(kJoinSearch);
   cs.join_hash.reserve(2 * kJoinSearch);
 }
 
@@ -119,13 +125,6 @@ void reset_release_trigger(const Model& m, ContactSet& cs) {
   const auto nb = static_cast<std::int64_t>(m.n_blocks());
   sync_release_counts(m, cs);
   cs.blk_near.assign(static_cast<std::size_t>(nb), 0);
-  const std::size_t ng = cs.grp_speed.size();
-  cs.grp_near.assign(ng, 0);
-  cs.grp_lo.resize(ng);
-  cs.grp_hi.resize(ng);
-  cs.rel_lo.resize(ng);
-  cs.rel_hi.resize(ng);
-  cs.rel_groups.reserve(std::max<std::size_t>(ng, kMaxReleaseGroups));
   cs.release_drift_far = 0;
 }
 
@@ -133,13 +132,12 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
   const auto ng = static_cast<std::int64_t>(cs.grp_speed.size());
   const auto nb = static_cast<std::int64_t>(m.n_blocks());
   const std::uint8_t* const skip = m.no_contact.empty() ? nullptr : m.no_contact.data();
-  if (cs.grp_near.size() != static_cast<std::size_t>(ng) || cs.blk_near.size() != static_cast<std::size_t>(nb) ||
-      cs.blk_released.size() != static_cast<std::size_t>(nb) || cs.ifc_free.size() != m.n_ifaces()) {
+  if (cs.blk_near.size() != static_cast<std::size_t>(nb) || cs.blk_released.size() != static_cast<std::size_t>(nb) ||
+      cs.ifc_free.size() != m.n_ifaces() || cs.grp_lo.size() != static_cast<std::size_t>(ng)) {
     // (a checkpoint written before the split: every block near, the far sum the old one, so the
     // old rule until the next build)
     const double drift = cs.release_drift;
     reset_release_trigger(m, cs);
-    std::fill(cs.grp_near.begin(), cs.grp_near.end(), std::uint8_t{1});
     std::fill(cs.blk_near.begin(), cs.blk_near.end(), std::uint8_t{1});
     cs.release_drift_far = drift;
   } else if (cs.released_looked != m.released_points) {
@@ -181,8 +179,7 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
       const std::int64_t g = cs.rel_groups[r];
       for (std::int64_t b = g * kSleepGroup; b < std::min(nb, (g + 1) * kSleepGroup) && !split; ++b)
         for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1] && !split; ++e) {
-          const std::int32_t code = m.block_iface_list[e];
-          const auto i = static_cast<std::size_t>(code > 0 ? code - 1 : -code - 1);
+          const std::size_t i = iface_of(m.block_iface_list[e]);
           if (cs.ifc_free[i] || !fully_released(m, i)) continue;
           cs.ifc_free[i] = 1;
           const std::int32_t ba = m.iface_block_a[i], bb = m.iface_block_b[i];
@@ -216,7 +213,6 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
     // it in space) are near: first their groups' boxes (this step's, from the speed pass), then
     // each block's. Each group and its blocks are marked by one thread.
     if (split) {
-      std::fill(cs.grp_near.begin(), cs.grp_near.end(), std::uint8_t{1});
       std::fill(cs.blk_near.begin(), cs.blk_near.end(), std::uint8_t{1});
     } else if (!cs.rel_groups.empty()) {
       const int dim = m.dim;
@@ -237,7 +233,6 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
           for (const std::int32_t h : cs.rel_groups)
             if (within(lo, hi, h)) {
               cs.blk_near[b] = 1;
-              cs.grp_near[g] = 1;
               break;
             }
         }
@@ -247,14 +242,11 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
   }
   // 3. The largest speed of the near blocks' nodes, now (a maximum: the same in any order).
   static LoopSplit split_speed;
-  return std::sqrt(split_speed.run_reduce(ng, 0.0, [&](const LoopSplit::Range& part) {
+  return std::sqrt(split_speed.run_reduce(nb, 0.0, [&](const LoopSplit::Range& part) {
     double v = 0;
-    for (std::int64_t g = part.lo; g < part.hi; ++g) {
-      if (!cs.grp_near[g]) continue;
-      for (std::int64_t b = g * kSleepGroup; b < std::min(nb, (g + 1) * kSleepGroup); ++b) {
-        if (!cs.blk_near[b] || (skip && skip[b])) continue;
-        for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) v = std::max(v, dot(m.v[n], m.v[n]));
-      }
+    for (std::int64_t b = part.lo; b < part.hi; ++b) {
+      if (!cs.blk_near[b] || (skip && skip[b])) continue;
+      for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) v = std::max(v, dot(m.v[n], m.v[n]));
     }
     return v;
   }, [](double x, double y) { return std::max(x, y); }));

@@ -57,11 +57,8 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.cand_nodes", cs.cand_nodes);
   ar.io("contact.x_build", cs.x_build);
   // the half skins of the last build (absent in checkpoints written before fast blocks had larger
-  // ones: the set-up's, as then) and the last step
-  if (!ar.loading() || ar.has("contact.half_skin")) {
-    ar.io("contact.half_skin", cs.half_skin);
-    ar.io("contact.dt", cs.dt);
-  }
+  // ones: the set-up's, as then)
+  if (!ar.loading() || ar.has("contact.half_skin")) ar.io("contact.half_skin", cs.half_skin);
   // the trigger's other nodes (absent in checkpoints written before each block had its own skin:
   // their list was built on one skin, so it is rebuilt at the next step)
   if (!ar.loading() || ar.has("contact.watch_x")) {
@@ -92,18 +89,13 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.release_drift", cs.release_drift);
   // the release trigger's neighbourhood (absent in checkpoints written before it: every group
   // near until the next build, the old rule; contact_release.cpp)
-  if (!ar.loading() || ar.has("contact.grp_near")) {
+  if (!ar.loading() || ar.has("contact.blk_near")) {
     ar.io("contact.release_drift_far", cs.release_drift_far);
     ar.io("contact.blk_near", cs.blk_near);
-    ar.io("contact.grp_near", cs.grp_near);
-    if (ar.loading()) {
-      // (the released counts are the state's: Simulation::io_state recomputes them)
-      const std::size_t ng = cs.grp_near.size();
-      for (auto* v : {&cs.grp_lo, &cs.grp_hi, &cs.rel_lo, &cs.rel_hi}) v->resize(ng);
-      cs.rel_groups.reserve(ng);
-    }
+    // (the released counts are the state's, the group boxes this step's: Simulation::io_state
+    // recomputes the first and sizes the others, sync_release_counts)
   } else {
-    cs.grp_near.clear();
+    cs.blk_near.clear();
   }
   ar.io("contact.diss_closed", cs.diss_closed);
   ar.io("contact.rebuilds", cs.rebuilds);

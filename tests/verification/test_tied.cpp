@@ -468,6 +468,40 @@ std::uint8_t probe(InterfaceLaw law, const Sym6& sigma, Model* out = nullptr, bo
   return mode;
 }
 
+// untie_point keeps a vertex's clusters when the untied point's two nodes are still joined
+// through other tied points (a search over the cluster) and recomputes them otherwise. The
+// clusters must be exactly those of a full recomputation (split_vertex of every vertex, the
+// canonical order the integration sums in) after every untie, for points untied in a random
+// order until none is left (every vertex ends with one cluster per node), in 3D and 2D. Exact
+// equality: the order is the integration's summation order.
+void untie_matches_full_split(const Mesh& mesh) {
+  Model m = make_model(mesh, rock(), interface_of(InterfaceLaw::MohrCoulomb));
+  build_ties(m);
+  std::vector<std::size_t> order(m.n_springs());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937 rng(7);
+  std::shuffle(order.begin(), order.end(), rng);
+  std::size_t splits = 0, clusters = count_clusters(m);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    untie_point(m, order[k]);
+    const std::size_t now = count_clusters(m);
+    splits += now != clusters;
+    clusters = now;
+    Model full = m;
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(full.n_vertices()); ++v) split_vertex(full, v);
+    ASSERT_TRUE(same_bits(m.vtx_nodes, full.vtx_nodes)) << "after untie " << k;
+    ASSERT_TRUE(same_bits(m.vtx_run, full.vtx_run)) << "after untie " << k;
+  }
+  EXPECT_EQ(count_clusters(m), m.n_nodes());  // all untied: every node its own cluster
+  EXPECT_GT(splits, 0u);
+  EXPECT_LT(splits, order.size());  // most unties leave the clusters as they were
+  std::printf("[untie] %zu blocks: %zu points untied one by one, %zu of them split a cluster\n",
+              m.n_blocks(), order.size(), splits);
+}
+
+TEST(TiedClusters, UntieMatchesFullSplit3D) { untie_matches_full_split(tet_box(3, 3, 2, 1, 1, 1)); }
+TEST(TiedClusters, UntieMatchesFullSplit2D) { untie_matches_full_split(tri_grid(5, 4, 1, 1)); }
+
 TEST(TiedStrength, TensionAtFtShearAtCoulomb) {
   const double ft = 5e6, c = 15e6, tphi = std::tan(30 * kPi / 180), p = 20e6;
   for (bool quads : {false, true}) {

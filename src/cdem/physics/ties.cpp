@@ -196,13 +196,113 @@ void order_active_ifaces(Model& m) {
   m.active_sorted = n;
 }
 
+namespace {
+
+// Whether nodes a (of block block_a) and b, split from one mesh vertex, are still joined through
+// the tied spring points at that vertex: a breadth-first search over the nodes of a's cluster,
+// stopping at b. Returns 0 when b is reached, else the number of nodes of a's component, which
+// are left at the start of vtx_scratch (for split_cluster).
+// Each step goes from a node to the other node of a tied point at it, through the interfaces of
+// the node's block, and knows that node's block from the interface's other side (no search of
+// block_first_node). Work space: vtx_scratch (set-up-sized, 4 x the largest vertex degree; the
+// nodes reached are at most the vertex's).
+std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, std::int32_t b) {
+  const int np = m.springs_per_iface;
+  std::int32_t* node = m.vtx_scratch.data();                     // nodes reached, in order
+  std::int32_t* block = node + m.vtx_scratch.size() / 2;         // their blocks
+  std::size_t n_reached = 1, head = 0;
+  node[0] = a;
+  block[0] = block_a;
+  while (head < n_reached) {
+    const std::int32_t n = node[head], blk = block[head];
+    ++head;
+    for (auto e = m.block_iface_offset[blk]; e < m.block_iface_offset[blk + 1]; ++e) {
+      const std::int32_t code = m.block_iface_list[e];
+      const bool a_side = code > 0;
+      const std::int32_t j = (a_side ? code : -code) - 1;
+      const std::size_t s0 = static_cast<std::size_t>(j) * np;
+      for (int q = 0; q < np; ++q) {
+        const std::size_t s = s0 + q;
+        if (!m.sp_tied[s] || (a_side ? m.sp_a[s] : m.sp_b[s]) != n) continue;
+        const std::int32_t other = a_side ? m.sp_b[s] : m.sp_a[s];
+        if (other == b) return 0;
+        if (std::find(node, node + n_reached, other) != node + n_reached) continue;
+        node[n_reached] = other;
+        block[n_reached] = a_side ? m.iface_block_b[j] : m.iface_block_a[j];
+        ++n_reached;
+      }
+    }
+  }
+  return n_reached;
+}
+
+// Splits the cluster of vertex v that holds a into a's component (the n_a nodes at the start of
+// vtx_scratch, left there by component_without) and the rest, keeping split_vertex's canonical
+// order: clusters by their smallest node, nodes ascending in each. The part holding the cluster's
+// first node keeps its place; the other moves to its place among the later clusters.
+void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a) {
+  const auto o0 = m.vtx_offset[v], o1 = m.vtx_offset[v + 1];
+  const std::size_t half = m.vtx_scratch.size() / 2;
+  std::int32_t* comp = m.vtx_scratch.data();               // a's component (sorted below)
+  std::int32_t* out = comp + half;                          // the vertex's list from the cluster on
+  std::int32_t* run = out + half / 2;                       // and its run marks
+  std::sort(comp, comp + n_a);
+  auto p = o0;
+  while (m.vtx_nodes[p] != a) ++p;
+  while (!m.vtx_run[p]) --p;                                // the cluster's first node
+  auto q = p + 1;
+  while (q < o1 && !m.vtx_run[q]) ++q;
+  // The cluster's nodes (ascending) in two parts: X holds its first node, Y the others.
+  const bool first_in_a = std::binary_search(comp, comp + n_a, m.vtx_nodes[p]);
+  int w = 0;
+  for (auto k = p; k < q; ++k)                              // X, in place of the cluster
+    if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) == first_in_a) {
+      run[w] = w == 0;
+      out[w++] = m.vtx_nodes[k];
+    }
+  std::int32_t y0 = -1;                                     // Y's first node
+  for (auto k = p; k < q && y0 < 0; ++k)
+    if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) != first_in_a) y0 = m.vtx_nodes[k];
+  auto put_y = [&] {
+    for (auto k = p; k < q; ++k)
+      if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) != first_in_a) {
+        run[w] = m.vtx_nodes[k] == y0;
+        out[w++] = m.vtx_nodes[k];
+      }
+  };
+  bool y_put = false;
+  for (auto k = q; k < o1; ++k) {                           // the later clusters, Y among them
+    if (!y_put && m.vtx_run[k] && m.vtx_nodes[k] > y0) {
+      put_y();
+      y_put = true;
+    }
+    run[w] = m.vtx_run[k];
+    out[w++] = m.vtx_nodes[k];
+  }
+  if (!y_put) put_y();
+  for (int k = 0; k < w; ++k) {
+    m.vtx_nodes[p + k] = out[k];
+    m.vtx_run[p + k] = static_cast<std::uint8_t>(run[k]);
+  }
+}
+
+}  // namespace
+
 void untie_point(Model& m, std::size_t s) {
   if (!m.sp_tied[s]) return;
   m.sp_tied[s] = 0;
   const auto i = static_cast<std::int32_t>(s / static_cast<std::size_t>(m.springs_per_iface));
   activate_interface(m, i);
   update_check_flag(m, i);
-  split_vertex(m, m.node_vertex[m.sp_a[s]]);
+  // The clusters change only if a and b are no longer joined through other tied points (around
+  // the edges of the vertex's ball of blocks there usually is such a path, a few blocks long).
+  // If they are not, their cluster is split in two: a's component, which the search has just
+  // walked whole, and the rest (removing one link from a connected set leaves at most two). The
+  // clusters are a function of the tied points alone, in split_vertex's canonical order, so
+  // this is the same state as recomputing the vertex (test TiedClusters.UntieMatchesFullSplit).
+  const std::int32_t a = m.sp_a[s];
+  const std::size_t n_a = component_without(m, a, m.iface_block_a[i], m.sp_b[s]);
+  if (n_a > 0) split_cluster(m, m.node_vertex[a], a, n_a);
 }
 
 std::size_t count_clusters(const Model& m) {

@@ -41,5 +41,43 @@ TEST(RestartSignature, OldCheckpointReadsAsReleaseAngle180) {
   EXPECT_EQ(upgrade_signature(resolved_case_toml(c)), resolved_case_toml(c));
 }
 
+// `resume` reads the run's case.resolved.toml, whose [delays] table was written in the order the
+// case's table was walked: a hash order, which need not survive writing and reading back. The
+// SPEC 5.3 example (three delay groups) then refused to resume ("the case differs ... at
+// '"1" = 0'"). The groups are kept in key order, so the resolved case reads back to the same
+// signature; a signature written in the old order reads as the sorted one.
+TEST(RestartSignature, ResolvedCaseWithDelaysReadsBackTheSame) {
+  const std::string text =
+      "[mesh.generate]\nshape = \"box\"\nsize = [2.0, 2.0, 2.0]\nelement_size = 0.5\n"
+      "[simulation]\nend_time = 1e-3\n"
+      "[[material]]\nname = \"r\"\nregions = [\"rock\"]\ndensity = 2600\nyoungs_modulus = 3e10\n"
+      "poisson_ratio = 0.25\n"
+      "[[explosive]]\nname = \"e\"\ndensity = 1000\ndetonation_velocity = 4000\ndetonation_heat = 4e6\n"
+      "[[hole]]\nname = \"h1\"\ngroup = \"1\"\ncollar = [0.5, 0.5, 2.0]\nend = [0.5, 0.5, 0.5]\ndiameter = 0.04\n"
+      "[[hole.charge]]\nexplosive = \"e\"\nlength = 1.0\n"
+      "[[hole]]\nname = \"h2\"\ngroup = \"2\"\ncollar = [1.5, 0.5, 2.0]\nend = [1.5, 0.5, 0.5]\ndiameter = 0.04\n"
+      "[[hole.charge]]\nexplosive = \"e\"\nlength = 1.0\n"
+      "[[hole]]\nname = \"h3\"\ngroup = \"3\"\ncollar = [1.5, 1.5, 2.0]\nend = [1.5, 1.5, 0.5]\ndiameter = 0.04\n"
+      "[[hole.charge]]\nexplosive = \"e\"\nlength = 1.0\n"
+      "[[hole]]\nname = \"h10\"\ngroup = \"10\"\ncollar = [0.5, 1.5, 2.0]\nend = [0.5, 1.5, 0.5]\ndiameter = 0.04\n"
+      "[[hole.charge]]\nexplosive = \"e\"\nlength = 1.0\n"
+      "[delays]\n\"1\" = 0\n\"2\" = 0.02\n\"3\" = 0.03\n\"10\" = 0.1\n";
+  const Case c = parse_case(text, "c.toml");
+  ASSERT_EQ(c.delay_groups.size(), 4u);
+  for (std::size_t k = 1; k < c.delay_groups.size(); ++k)
+    EXPECT_LT(c.delay_groups[k - 1].name, c.delay_groups[k].name);
+  const std::string resolved = resolved_case_toml(c);
+  const Case back = parse_case(resolved, "case.resolved.toml");
+  EXPECT_EQ(restart_signature(back), restart_signature(c));
+  // an old signature, its [delays] lines in another order, reads as today's
+  const std::string sig = restart_signature(c);
+  const std::string sorted = "[delays]\n\"1\" = 0\n\"10\" = 0.10000000000000001\n\"2\" = 0.02\n\"3\" = 0.029999999999999999\n";
+  ASSERT_NE(sig.find(sorted), std::string::npos) << sig;
+  std::string old = sig;
+  old.replace(old.find(sorted), sorted.size(),
+              "[delays]\n\"2\" = 0.02\n\"3\" = 0.029999999999999999\n\"1\" = 0\n\"10\" = 0.10000000000000001\n");
+  EXPECT_EQ(upgrade_signature(old), sig);
+}
+
 }  // namespace
 }  // namespace cdem

@@ -199,6 +199,10 @@ void apply_delay_groups(const TomlTable& top, Case& c) {
     }
     c.delay_groups.push_back(g);
   }
+  // in key order: the table is walked in its hash order, which writing the resolved case and
+  // reading it back need not keep (the restart signature compares the written text)
+  std::sort(c.delay_groups.begin(), c.delay_groups.end(),
+            [](const DelayGroup& a, const DelayGroup& b) { return a.name < b.name; });
 }
 
 void resolve_material_explosives(Case& c) {

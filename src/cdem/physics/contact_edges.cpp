@@ -97,6 +97,15 @@ void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
   r = std::sqrt(r2);
 }
 
+// Per set of a tetrahedron's nodes (4 bits), the edges with both ends in it (6 bits).
+constexpr std::array<int, 16> kEdgesWithin = [] {
+  std::array<int, 16> t{};
+  for (int set = 0; set < 16; ++set)
+    for (int e = 0; e < 6; ++e)
+      if ((set >> kTetEdges[e][0] & 1) && (set >> kTetEdges[e][1] & 1)) t[set] |= 1 << e;
+  return t;
+}();
+
 // Is every node of S in front of one face plane of G (beyond tol)? Then the two tetrahedra
 // do not overlap and no edge of either is inside the other. (Touching blocks, within tol of a
 // common plane, are not separated: their coplanar edge crossings hold aligned blocks whose
@@ -107,28 +116,39 @@ void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
 // with it can hit: skipping it changes no result).
 // When separated, `gap` gets how far S's nodes are in front of that plane (the least of them).
 bool separated(const TetGeom& G, const TetGeom& S, int& edges, double& gap) {
-  int front2 = 0;  // bit 4 k + i: node i of S in front of face k of G by more than 2 tol
+  // The 16 signed distances first, S's nodes by coordinate so that the four of a face plane are
+  // one vector operation, and then the tests on them as bit masks: the same products and sums as
+  // dot(S.x[i] - G.a0[k], G.n[k]) (this file is compiled without contraction), so the same bits,
+  // without the data-dependent branches of testing one distance at a time.
+  double sx[4], sy[4], sz[4];
+  for (int i = 0; i < 4; ++i) sx[i] = S.x[i].x, sy[i] = S.x[i].y, sz[i] = S.x[i].z;
+  int front1 = 0, front2 = 0;  // bit 4 k + i: node i of S in front of face k of G by more than tol, 2 tol
+  double dist[4][4];
+  const double tol = G.tol, tol2 = 2 * G.tol;
   for (int k = 0; k < 4; ++k) {
-    bool all = true;
-    double least = std::numeric_limits<double>::infinity();
+    const Vec3 a0 = G.a0[k], n = G.n[k];
+    int m1 = 0, m2 = 0;
     for (int i = 0; i < 4; ++i) {
-      const double g = dot(S.x[i] - G.a0[k], G.n[k]);
-      all = all && g > G.tol;
-      least = std::min(least, g);
-      if (g > 2 * G.tol) front2 |= 1 << (4 * k + i);
+      const double g = (sx[i] - a0.x) * n.x + (sy[i] - a0.y) * n.y + (sz[i] - a0.z) * n.z;
+      dist[k][i] = g;
+      m1 |= (g > tol) << i;
+      m2 |= (g > tol2) << i;
     }
-    if (all) {
+    front1 |= m1 << (4 * k);
+    front2 |= m2 << (4 * k);
+  }
+  for (int k = 0; k < 4; ++k)
+    if (((front1 >> (4 * k)) & 15) == 15) {
+      double least = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 4; ++i) least = std::min(least, dist[k][i]);
       gap = least;
       return true;
     }
-  }
-  edges = 0;
-  for (int e = 0; e < 6; ++e) {
-    const int both = (1 << kTetEdges[e][0]) | (1 << kTetEdges[e][1]);
-    bool out = false;
-    for (int k = 0; k < 4 && !out; ++k) out = ((front2 >> (4 * k)) & both) == both;
-    if (!out) edges |= 1 << e;
-  }
+  // an edge is out when both its ends are in front of one plane: per plane, the edges whose two
+  // nodes are in its 4-bit set (kEdgesWithin)
+  int out = 0;
+  for (int k = 0; k < 4; ++k) out |= kEdgesWithin[(front2 >> (4 * k)) & 15];
+  edges = ~out & 63;
   return false;
 }
 

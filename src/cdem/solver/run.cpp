@@ -82,6 +82,24 @@ std::string upgrade_signature(std::string sig) {
     const auto e = p == std::string::npos ? p : sig.find('\n', p + 1);
     if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
   }
+  // [delays] was written in the hash order of the case's table before 6 Dec 2026; now by key
+  const auto d = sig.find("\n[delays]\n");
+  if (d != std::string::npos) {
+    const std::size_t begin = d + 10;
+    std::size_t end = begin;
+    std::vector<std::pair<std::string, std::string>> lines;  // (key, line)
+    while (end < sig.size() && sig[end] == '"') {
+      const auto nl = sig.find('\n', end);
+      const std::string line = sig.substr(end, (nl == std::string::npos ? sig.size() : nl) - end);
+      const auto close = line.find('"', 1);
+      lines.emplace_back(line.substr(1, close == std::string::npos ? std::string::npos : close - 1), line);
+      end = nl == std::string::npos ? sig.size() : nl + 1;
+    }
+    std::sort(lines.begin(), lines.end());
+    std::string sorted;
+    for (const auto& [key, line] : lines) sorted += line + "\n";
+    if (sorted.size() == end - begin) sig.replace(begin, end - begin, sorted);
+  }
   return sig;
 }
 

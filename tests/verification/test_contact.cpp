@@ -178,6 +178,19 @@ void impact(int dim, double offset) {
   EXPECT_LT(a.v.x, 0.0);  // bounced back
   EXPECT_GT(b.v.x, 0.0);
   EXPECT_LT(a.x.x + 0.5 * size, b.x.x - 0.5 * size + 1e-9);  // apart
+  // where the largest penetration was reached (summary.json): between the two bodies, on the
+  // plane they meet on (x = size + gap / 2, the impact being symmetric) within the penetration
+  // bound, after the gap closed (at gap / 2 v0) and before the end of the impact phase
+  const auto& at = sim.contact().max_pen_at;
+  const Model& m = sim.model();
+  ASSERT_GE(at.block, 0);
+  const std::int32_t other = at.node >= 0 ? m.node_block(static_cast<std::size_t>(at.node)) : at.other;
+  EXPECT_NE(m.block_region[at.block], m.block_region[other]);
+  EXPECT_NEAR(at.x.x, size + 0.5 * gap, 2 * d_bound + 1e-9);
+  EXPECT_GT(at.time, 0.5 * gap / v0);
+  EXPECT_LT(at.time, t_end);
+  std::printf("[contact impact] largest penetration %.3g of the block size at t = %.3g s, %s, x = %.5f m\n",
+              sim.contact().max_pen_ratio, at.time, at.node >= 0 ? "node against face" : "edge crossing", at.x.x);
 }
 
 TEST(ContactImpact, HeadOn2D) { impact(2, 0.0); impact(2, 0.013); }

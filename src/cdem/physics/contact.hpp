@@ -260,6 +260,16 @@ struct ContactSet {
   // sleep's saving is these against the pairs' count times the steps
   std::int64_t pair_tests = 0, block_pair_tests = 0;
   double max_pen_ratio = 0;              // max over the run of penetration / face block size
+  // Where max_pen_ratio was reached (summary.json): a node pressed into a block (node >= 0), or
+  // an edge crossing of blocks `block` and `other` (node -1; x the point on block's edge); x the
+  // place then; time set by the caller (Simulation) in the step it is found (fresh). block -1:
+  // none yet, or a checkpoint written before this was kept.
+  struct PenetrationRecord {
+    double time = -1;
+    std::int32_t node = -1, block = -1, other = -1;
+    Vec3 x{};
+    bool fresh = false;
+  } max_pen_at;
   // the pair buffers' size: the most pairs any build has listed (each of the two lists, this
   // build's and the previous one's, is grown to it when it is short; a checkpoint keeps it, so
   // a restarted run reports what an uninterrupted one does)

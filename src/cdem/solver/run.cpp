@@ -131,6 +131,29 @@ std::uint64_t energy_bits(const EnergyBalance& e) {
 
 
 namespace {
+// summary.json: where the run's largest contact penetration was reached (null: none, or a run
+// continued from a checkpoint written before this was kept, until it grows again).
+std::string max_penetration_json(const Model& m, const ContactSet& cs) {
+  const auto& r = cs.max_pen_at;
+  const auto nb = static_cast<std::int32_t>(m.n_blocks());
+  const bool edge = r.node < 0;
+  const bool valid = r.block >= 0 && r.block < nb &&
+                     (edge ? r.node == -1 && r.other >= 0 && r.other < nb
+                           : r.node < static_cast<std::int32_t>(m.n_nodes()) && r.other == -1);
+  if (!valid) return "null";
+  std::string o = fmt::format("{{\"time\": {}, \"kind\": {}, ", json_number(r.time),
+                              json_string(edge ? "edge_edge" : "node_face"));
+  if (edge)
+    o += fmt::format("\"blocks\": [{}, {}], ", r.block, r.other);
+  else
+    o += fmt::format("\"node\": {}, \"node_block\": {}, \"block\": {}, ", r.node, m.node_block(static_cast<std::size_t>(r.node)), r.block);
+  const std::int32_t reg = m.block_region[static_cast<std::size_t>(r.block)];
+  o += fmt::format("\"region\": {}, \"x\": [{}, {}, {}]}}",
+                   reg >= 0 && static_cast<std::size_t>(reg) < m.region_names.size() ? json_string(m.region_names[reg]) : "null",
+                   json_number(r.x.x), json_number(r.x.y), json_number(r.x.z));
+  return o;
+}
+
 // summary.json: the region names by index, the fracture degree per region, the largest
 // displacement along up (all blocks, and rock blocks only) and where.
 void add_region_and_uplift_summary(std::vector<std::pair<std::string, std::string>>& kv,
@@ -607,6 +630,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       {"contact_rebuilds", std::to_string(sim.contact().rebuilds)},
       {"contact_edge_pairs_max", std::to_string(sim.contact().ec_active_max)},
       {"contact_max_penetration_ratio", json_number(sim.contact().max_pen_ratio)},
+      {"contact_max_penetration_at", max_penetration_json(m, sim.contact())},
       {"contact_energy", json_number(last.contact_strain)},
       {"contact_dissipated", json_number(last.contact_friction)},
       {"dt_blocks", json_number(st.dt_block)},

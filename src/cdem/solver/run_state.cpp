@@ -102,6 +102,18 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.active", cs.active);
   ar.io("contact.active_max", cs.active_max);
   ar.io("contact.max_pen_ratio", cs.max_pen_ratio);
+  // where it was reached (absent in checkpoints written before 6 Dec 2026: unknown, block -1,
+  // until the run's largest penetration grows again)
+  if (!ar.loading() || ar.has("contact.max_pen_time")) {
+    auto& r = cs.max_pen_at;
+    ar.io("contact.max_pen_time", r.time);
+    std::vector<std::int32_t> ids{r.node, r.block, r.other};
+    ar.io("contact.max_pen_ids", ids);
+    ar.io("contact.max_pen_x", r.x);
+    if (ar.loading() && ids.size() == 3) r.node = ids[0], r.block = ids[1], r.other = ids[2];
+  } else {
+    cs.max_pen_at = {};
+  }
   // the edge contacts (absent in checkpoints written before they existed: none then)
   if (!ar.loading() || ar.has("contact.ec_a")) {
     ar.io("contact.ec_a", cs.ec_a);

@@ -287,6 +287,7 @@ void Simulation::step(bool sample) {
   lap(kStepBlocks);
   // 4. general contact between fragments, released faces and boundary faces
   contact_forces(m_, contact_, dt_);
+  if (contact_.max_pen_at.fresh) contact_.max_pen_at.time = t_, contact_.max_pen_at.fresh = false;
   lap(kStepContact);
   // 5. explosive and other loads (a charge's blocks get their total stress: the products'
   // pressure included)

@@ -153,7 +153,8 @@ struct Model {
   std::vector<std::int32_t> active_merge;     // scratch of that merge (capacity n_ifaces)
   std::size_t active_sorted = 0;              // leading entries of active_ifaces known ascending
   std::vector<std::uint8_t> block_active;     // 1: the block has an active interface (gather)
-  std::vector<std::int32_t> vtx_scratch;      // set-up-sized work space of the cluster split
+  std::vector<std::int32_t> vtx_scratch;      // set-up-sized work space of the cluster split,
+  std::size_t vtx_scratch_slot = 0;           // in slots of this size, one per thread
   std::vector<double> tie_reject;             // per interface material: the stress norm (Pa)
                                               // below which no tie can break (tie_failure.cpp)
   std::size_t n_vertices() const { return vtx_offset.empty() ? 0 : vtx_offset.size() - 1; }

@@ -1,5 +1,7 @@
 #include "cdem/physics/tie_failure.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -118,36 +120,81 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
     return n_failed;
   }, std::plus<>{});
   if (failed == 0) return 0.0;
+  // The failed interfaces (flag: the mode in bits 0-1), in three passes.
+  // (1) In parallel over the interfaces: each failed one's traction, and its tied points' new
+  // state and force (per point: no two interfaces write the same); the points to untie are
+  // marked in flag bits 2-4 (one per point, np <= 3). The interface's normal is this traction's.
+  split.run(ni, [&](const LoopSplit::Range& part) {
+    for (std::int64_t i = part.lo; i < part.hi; ++i) {
+      if (flag[i] == kModeNone) continue;
+      const std::uint8_t mode = flag[i];
+      const FaceTraction tr = face_traction(m, i);
+      const double area = m.sp_area.v[i], kn = m.sp_kn.v[i];
+      const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+      std::uint8_t marks = mode;
+      for (int q = 0; q < np; ++q) {
+        const std::size_t s = static_cast<std::size_t>(i) * np + q;
+        if (!m.sp_tied[s]) continue;
+        double fn = tr.tn * area;
+        Vec3 fs = area * tr.ts;
+        if (law.law == InterfaceLaw::MohrCoulomb) {
+          m.sp_state[s] = kBroken;
+          m.sp_mode[s] = mode;
+          m.sp_break_time[s] = static_cast<float>(t);
+          fn = std::min(0.0, fn);
+          cap(fs, -fn * law.tan_phi_r);
+        } else {  // fracture energy: a cohesive point at its peak strength, zero opening
+          fn = std::min(fn, law.ft * area);
+          cap(fs, std::max(0.0, law.c * area - fn * law.tan_phi));
+        }
+        m.sp_fn[s] = fn;
+        m.sp_fs[s] = fs;
+        m.sp_g0[s] = kn > 0 ? fn / kn : 0.0;
+        marks |= static_cast<std::uint8_t>(4 << q);
+      }
+      flag[i] = marks;
+      if (marks >= 4) m.iface_normal[i] = tr.n;
+    }
+  });
+  // (2) The clusters, in parallel over the mesh vertices: each thread unties the marked points of
+  // its range of vertices (a point's two nodes are split from one vertex, and a split touches
+  // that vertex's nodes and tied points only), in interface order; the clusters do not depend
+  // on the order (untie_at_vertex).
+  const auto nv = static_cast<std::int64_t>(m.n_vertices());
+  const int nt = std::min(omp_get_max_threads(), kMaxUntieThreads);
+#pragma omp parallel num_threads(nt)
+  {
+    const int th = omp_get_thread_num(), nth = omp_get_num_threads();
+    const std::int64_t v_lo = nv * th / nth, v_hi = nv * (th + 1) / nth;
+    for (std::int64_t i = 0; i < ni; ++i) {
+      if (flag[i] < 4) continue;
+      for (int q = 0; q < np; ++q) {
+        if (!(flag[i] & (4 << q))) continue;
+        const std::size_t s = static_cast<std::size_t>(i) * np + q;
+        const std::int64_t v = m.node_vertex[m.sp_a[s]];
+        if (v >= v_lo && v < v_hi) untie_at_vertex(m, s, th);
+      }
+    }
+  }
+  // (3) Serially, in interface order: the active list, the check flags, the forces on the nodes
+  // and the insertion energy (sums in a fixed order).
   double insertion = 0;
   for (std::int64_t i = 0; i < ni; ++i) {
     if (flag[i] == kModeNone) continue;
-    const std::uint8_t mode = flag[i];
+    const std::uint8_t marks = flag[i];
     flag[i] = kModeNone;
-    const FaceTraction tr = face_traction(m, i);
-    const double area = m.sp_area.v[i], kn = m.sp_kn.v[i], ks = m.sp_ks.v[i];
-    const SpringLaw& law = m.spring_laws[m.iface_material[i]];
+    if (marks < 4) continue;  // (no tied point left: nothing changes)
+    const Vec3 n = m.iface_normal[i];
+    after_untie(m, static_cast<std::int32_t>(i));
+    m.iface_normal[i] = n;  // (the traction's normal, not the one activation computes)
+    const double kn = m.sp_kn.v[i], ks = m.sp_ks.v[i];
     for (int q = 0; q < np; ++q) {
+      if (!(marks & (4 << q))) continue;
       const std::size_t s = static_cast<std::size_t>(i) * np + q;
-      if (!m.sp_tied[s]) continue;
-      double fn = tr.tn * area;
-      Vec3 fs = area * tr.ts;
-      if (law.law == InterfaceLaw::MohrCoulomb) {
-        m.sp_state[s] = kBroken;
-        m.sp_mode[s] = mode;
-        m.sp_break_time[s] = static_cast<float>(t);
-        fn = std::min(0.0, fn);
-        cap(fs, -fn * law.tan_phi_r);
-      } else {  // fracture energy: a cohesive point at its peak strength, zero opening
-        fn = std::min(fn, law.ft * area);
-        cap(fs, std::max(0.0, law.c * area - fn * law.tan_phi));
-      }
-      m.sp_fn[s] = fn;
-      m.sp_fs[s] = fs;
-      m.sp_g0[s] = kn > 0 ? fn / kn : 0.0;
+      const double fn = m.sp_fn[s];
+      const Vec3 fs = m.sp_fs[s];
       insertion += 0.5 * fn * fn / kn + 0.5 * dot(fs, fs) / ks;
-      untie_point(m, s);
-      m.iface_normal[i] = tr.n;
-      const Vec3 f = fn * tr.n + fs;
+      const Vec3 f = fn * n + fs;
       m.f[m.sp_a[s]] += f;
       m.f[m.sp_b[s]] -= f;
     }

@@ -73,7 +73,9 @@ void build_ties(Model& m) {
     for (std::size_t n = 0; n < nn; ++n) m.vtx_nodes[fill[m.node_vertex[n]]++] = static_cast<std::int32_t>(n);
   }
   m.vtx_run.assign(nn, 0);
-  m.vtx_scratch.assign(4 * static_cast<std::size_t>(kmax) + 1, 0);
+  // one slot per thread (untie_at_vertex runs in parallel over vertices: tie_failure.cpp)
+  m.vtx_scratch_slot = 4 * static_cast<std::size_t>(kmax) + 2;
+  m.vtx_scratch.assign(m.vtx_scratch_slot * kMaxUntieThreads, 0);
   for (std::int32_t v = 0; v < nv; ++v) split_vertex(m, v);
   // interfaces
   m.iface_check.assign(ni, 0);
@@ -201,15 +203,16 @@ namespace {
 // Whether nodes a (of block block_a) and b, split from one mesh vertex, are still joined through
 // the tied spring points at that vertex: a breadth-first search over the nodes of a's cluster,
 // stopping at b. Returns 0 when b is reached, else the number of nodes of a's component, which
-// are left at the start of vtx_scratch (for split_cluster).
+// are left at the start of the scratch slot (for split_cluster).
 // Each step goes from a node to the other node of a tied point at it, through the interfaces of
 // the node's block, and knows that node's block from the interface's other side (no search of
-// block_first_node). Work space: vtx_scratch (set-up-sized, 4 x the largest vertex degree; the
-// nodes reached are at most the vertex's).
-std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, std::int32_t b) {
+// block_first_node). Work space: one slot of vtx_scratch (set-up-sized, 4 x the largest vertex
+// degree; the nodes reached are at most the vertex's).
+std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, std::int32_t b,
+                              std::int32_t* scratch) {
   const int np = m.springs_per_iface;
-  std::int32_t* node = m.vtx_scratch.data();                     // nodes reached, in order
-  std::int32_t* block = node + m.vtx_scratch.size() / 2;         // their blocks
+  std::int32_t* node = scratch;                                  // nodes reached, in order
+  std::int32_t* block = node + m.vtx_scratch_slot / 2;           // their blocks
   std::size_t n_reached = 1, head = 0;
   node[0] = a;
   block[0] = block_a;
@@ -237,13 +240,13 @@ std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, st
 }
 
 // Splits the cluster of vertex v that holds a into a's component (the n_a nodes at the start of
-// vtx_scratch, left there by component_without) and the rest, keeping split_vertex's canonical
+// scratch slot, left there by component_without) and the rest, keeping split_vertex's canonical
 // order: clusters by their smallest node, nodes ascending in each. The part holding the cluster's
 // first node keeps its place; the other moves to its place among the later clusters.
-void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a) {
+void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a, std::int32_t* scratch) {
   const auto o0 = m.vtx_offset[v], o1 = m.vtx_offset[v + 1];
-  const std::size_t half = m.vtx_scratch.size() / 2;
-  std::int32_t* comp = m.vtx_scratch.data();               // a's component (sorted below)
+  const std::size_t half = m.vtx_scratch_slot / 2;
+  std::int32_t* comp = scratch;                             // a's component (sorted below)
   std::int32_t* out = comp + half;                          // the vertex's list from the cluster on
   std::int32_t* run = out + half / 2;                       // and its run marks
   std::sort(comp, comp + n_a);
@@ -288,21 +291,32 @@ void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a) {
 
 }  // namespace
 
-void untie_point(Model& m, std::size_t s) {
+void untie_at_vertex(Model& m, std::size_t s, int slot) {
   if (!m.sp_tied[s]) return;
   m.sp_tied[s] = 0;
   const auto i = static_cast<std::int32_t>(s / static_cast<std::size_t>(m.springs_per_iface));
-  activate_interface(m, i);
-  update_check_flag(m, i);
   // The clusters change only if a and b are no longer joined through other tied points (around
   // the edges of the vertex's ball of blocks there usually is such a path, a few blocks long).
   // If they are not, their cluster is split in two: a's component, which the search has just
   // walked whole, and the rest (removing one link from a connected set leaves at most two). The
   // clusters are a function of the tied points alone, in split_vertex's canonical order, so
-  // this is the same state as recomputing the vertex (test TiedClusters.UntieMatchesFullSplit).
+  // this is the same state as recomputing the vertex (test TiedClusters.UntieMatchesFullSplit),
+  // whatever the order in which a vertex's points are untied, one at a time.
+  std::int32_t* scratch = m.vtx_scratch.data() + static_cast<std::size_t>(slot) * m.vtx_scratch_slot;
   const std::int32_t a = m.sp_a[s];
-  const std::size_t n_a = component_without(m, a, m.iface_block_a[i], m.sp_b[s]);
-  if (n_a > 0) split_cluster(m, m.node_vertex[a], a, n_a);
+  const std::size_t n_a = component_without(m, a, m.iface_block_a[i], m.sp_b[s], scratch);
+  if (n_a > 0) split_cluster(m, m.node_vertex[a], a, n_a, scratch);
+}
+
+void after_untie(Model& m, std::int32_t i) {
+  activate_interface(m, i);
+  update_check_flag(m, i);
+}
+
+void untie_point(Model& m, std::size_t s) {
+  if (!m.sp_tied[s]) return;
+  untie_at_vertex(m, s, 0);
+  after_untie(m, static_cast<std::int32_t>(s / static_cast<std::size_t>(m.springs_per_iface)));
 }
 
 std::size_t count_clusters(const Model& m) {

@@ -38,6 +38,15 @@ void split_vertex(Model& m, std::int32_t v);
 // the cluster of its vertex.
 void untie_point(Model& m, std::size_t s);
 
+// untie_point in two parts, for untying many points in parallel (tie_failure): the first unties
+// s and splits the cluster of its vertex, touching only that vertex's nodes and tied points and
+// scratch slot `slot` (< kMaxUntieThreads): any threads may run it at once for points of
+// different vertices, each vertex's points one after the other in any order (the clusters are
+// the same). The second activates interface i and updates its check flag (serially).
+inline constexpr int kMaxUntieThreads = 64;
+void untie_at_vertex(Model& m, std::size_t s, int slot);
+void after_untie(Model& m, std::int32_t i);
+
 // Puts interface i on the active list (its untied points get spring updates; its blocks gather
 // spring forces) and sets its normal from the current positions.
 void activate_interface(Model& m, std::int32_t i);

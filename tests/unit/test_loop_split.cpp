@@ -167,3 +167,41 @@ TEST(LoopSplit, RunAndRunReduce) {
 
 }  // namespace
 }  // namespace cdem
+
+namespace cdem {
+namespace {
+
+// CountMax's join runs in the order the threads finish (a critical section): it must not depend
+// on it. The maximum's place is the least index among equal maxima, whichever range reports first.
+TEST(LoopSplit, CountMaxJoinIgnoresTheOrder) {
+  using CM = LoopSplit::CountMax;
+  const std::vector<CM> parts = {{3, 0.5, 7}, {2, 0.9, 40}, {0, 0.0, -1}, {4, 0.9, 12}, {1, 0.2, 90}};
+  std::vector<int> order = {0, 1, 2, 3, 4};
+  do {
+    CM all;
+    for (int k : order) all = CM::join(all, parts[static_cast<std::size_t>(k)]);
+    EXPECT_EQ(all.count, 10);
+    EXPECT_EQ(all.max, 0.9);
+    EXPECT_EQ(all.at, 12);
+  } while (std::next_permutation(order.begin(), order.end()));
+  // the maximum found in a parallel loop: the first of equal values in index order, any threads
+  std::vector<double> v(10000);
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = static_cast<double>((i * 7919) % 1000);
+  const int threads_before = omp_get_max_threads();
+  for (int t : {1, 2, 3}) {
+    LoopSplit split;
+    omp_set_num_threads(t);
+    const CM r = split.run_reduce(static_cast<std::int64_t>(v.size()), CM{}, [&](const LoopSplit::Range& part) {
+      CM held;
+      for (std::int64_t i = part.lo; i < part.hi; ++i)
+        if (v[static_cast<std::size_t>(i)] > held.max) held.max = v[static_cast<std::size_t>(i)], held.at = i;
+      return held;
+    }, CM::join);
+    EXPECT_EQ(r.max, 999.0);
+    EXPECT_EQ(r.at, static_cast<std::int64_t>(std::find(v.begin(), v.end(), 999.0) - v.begin())) << t;
+  }
+  omp_set_num_threads(threads_before);
+}
+
+}  // namespace
+}  // namespace cdem

@@ -77,6 +77,21 @@ TEST(RestartSignature, ResolvedCaseWithDelaysReadsBackTheSame) {
   old.replace(old.find(sorted), sorted.size(),
               "[delays]\n\"2\" = 0.02\n\"3\" = 0.029999999999999999\n\"1\" = 0\n\"10\" = 0.10000000000000001\n");
   EXPECT_EQ(upgrade_signature(old), sig);
+  // group names with a quote or a backslash: written escaped, sorted by the name itself
+  std::string quoted = text;
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{R"(group = "2")", R"(group = "a\"")"},
+                                 {R"(group = "3")", R"(group = "a$")"},
+                                 {R"(group = "10")", R"(group = "a\\")"},
+                                 {R"("2" = 0.02)", R"("a\"" = 0.02)"},
+                                 {R"("3" = 0.03)", R"("a$" = 0.03)"},
+                                 {R"("10" = 0.1)", R"("a\\" = 0.1)"}}) {
+    const auto at = quoted.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    quoted.replace(at, from.size(), to);
+  }
+  const Case cq = parse_case(quoted, "c.toml");
+  EXPECT_EQ(restart_signature(parse_case(resolved_case_toml(cq), "case.resolved.toml")), restart_signature(cq));
+  EXPECT_EQ(upgrade_signature(restart_signature(cq)), restart_signature(cq));
 }
 
 }  // namespace

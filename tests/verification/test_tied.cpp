@@ -9,6 +9,7 @@
 //  - the energy balance of undamped runs in which cracks form;
 //  - the P-wave speed on tets at the default settings, against the springs mode.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -493,10 +494,61 @@ void untie_matches_full_split(const Mesh& mesh) {
     ASSERT_TRUE(same_bits(m.vtx_run, full.vtx_run)) << "after untie " << k;
   }
   EXPECT_EQ(count_clusters(m), m.n_nodes());  // all untied: every node its own cluster
-  EXPECT_GT(splits, 0u);
-  EXPECT_LT(splits, order.size());  // most unties leave the clusters as they were
+  EXPECT_GT(splits, 0u);            // both branches taken: unties that split a cluster
+  EXPECT_LT(splits, order.size());  // and unties that leave the clusters as they were
   std::printf("[untie] %zu blocks: %zu points untied one by one, %zu of them split a cluster\n",
               m.n_blocks(), order.size(), splits);
+}
+
+// tie_failure unties in parallel over the mesh vertices (each thread its range, its own scratch):
+// with 1, 2 and 3 threads, rounds of random block stresses (growing, so that more ties fail each
+// round) must leave bitwise the same state (clusters, tied flags, forces, normals, active list,
+// insertion energy), and clusters equal to a full recomputation of every vertex. Tets, triangles
+// (two points per interface) and quads.
+void tie_failure_threads_match(const Mesh& mesh, unsigned seed) {
+  Model base = make_model(mesh, rock(), interface_of(InterfaceLaw::MohrCoulomb, 5e6, 15e6, 30));
+  build_ties(base);
+  set_opened_stiffness(base, 0.25, 1e12);
+  Model m[3] = {base, base, base};
+  std::vector<std::uint8_t> flag[3];
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int threads_before = omp_get_max_threads();
+  for (int round = 0; round < 30; ++round) {
+    std::vector<Sym6> stress(base.n_blocks());
+    for (auto& st : stress)
+      for (int k = 0; k < 6; ++k) st[k] = 4e6 * u(rng) * (1 + round * 0.05);
+    double insertion[3];
+    for (int t = 0; t < 3; ++t) {
+      m[t].stress = stress;
+      omp_set_num_threads(t + 1);
+      insertion[t] = tie_failure(m[t], round * 1e-6, flag[t]);
+    }
+    for (int t = 1; t < 3; ++t) {
+      EXPECT_TRUE(same_bits(std::vector<double>{insertion[0]}, std::vector<double>{insertion[t]})) << round;
+      EXPECT_TRUE(same_bits(m[0].vtx_nodes, m[t].vtx_nodes) && same_bits(m[0].vtx_run, m[t].vtx_run)) << round;
+      EXPECT_TRUE(same_bits(m[0].sp_tied, m[t].sp_tied) && same_bits(m[0].f, m[t].f) &&
+                  same_bits(m[0].iface_normal, m[t].iface_normal) &&
+                  same_bits(m[0].active_ifaces, m[t].active_ifaces) && same_bits(m[0].sp_fn, m[t].sp_fn))
+          << round;
+    }
+    Model full = m[2];
+    for (std::int32_t v = 0; v < static_cast<std::int32_t>(full.n_vertices()); ++v) split_vertex(full, v);
+    EXPECT_TRUE(same_bits(m[2].vtx_nodes, full.vtx_nodes) && same_bits(m[2].vtx_run, full.vtx_run)) << round;
+  }
+  omp_set_num_threads(threads_before);
+  std::size_t tied = 0;
+  for (auto x : m[0].sp_tied) tied += x;
+  std::printf("[untie threads] %zu blocks: %zu of %zu points still tied, %zu clusters\n", base.n_blocks(),
+              tied, base.n_springs(), count_clusters(m[0]));
+  EXPECT_GT(tied, 0u);                   // (not everything broke in the first round)
+  EXPECT_LT(tied, base.n_springs() / 2);  // (most did by the last)
+}
+
+TEST(TiedClusters, TieFailureThreadsMatchFullSplit) {
+  tie_failure_threads_match(tet_box(4, 4, 3, 1, 1, 0.75), 1);
+  tie_failure_threads_match(tri_grid(7, 6, 1, 1), 2);
+  tie_failure_threads_match(quad_grid(7, 6, 1, 1), 3);
 }
 
 TEST(TiedClusters, UntieMatchesFullSplit3D) { untie_matches_full_split(tet_box(3, 3, 2, 1, 1, 1)); }

@@ -137,7 +137,12 @@ class LoopSplit {
   struct CountMax {
     std::int64_t count = 0;
     double max = 0;
-    static CountMax join(CountMax a, CountMax b) { return {a.count + b.count, std::max(a.max, b.max)}; }
+    std::int64_t at = -1;  // where the maximum is (the body's choice; the least of equal ones)
+    static CountMax join(CountMax a, CountMax b) {
+      const std::int64_t at = a.max != b.max ? (a.max > b.max ? a.at : b.at)
+                              : a.at < 0 ? b.at : b.at < 0 ? a.at : std::min(a.at, b.at);
+      return {a.count + b.count, std::max(a.max, b.max), at};
+    }
   };
 
   // Cut k as a fraction of the loop (0 at k = 0; tests, reports).

@@ -17,18 +17,11 @@
 namespace cdem {
 namespace {
 
-// The contact that set this step's largest penetration ratio `ratio` (a new largest of the run),
-// found again by the same quotient in list order (the first of equals): serial, and run only when
-// the run's largest grows.
-void locate_max_penetration(const Model& m, ContactSet& cs, double ratio) {
+// The edge contact that set this step's largest penetration ratio `ratio`, a new largest of the
+// run (the node pairs' comes out of their pass), found by the same quotient in list order (the
+// first of equals): serial, over the few edge contacts, and only when the run's largest grows.
+void locate_edge_penetration(const Model& m, ContactSet& cs, double ratio) {
   auto& r = cs.max_pen_at;
-  for (std::size_t p = 0; p < cs.pair_gap.size(); ++p) {
-    const double gap = cs.pair_gap[p];
-    if (gap > 0 && gap / m.block_size[cs.pair_block[p]] == ratio) {
-      r = {-1, cs.pair_node[p], cs.pair_block[p], -1, m.x[cs.pair_node[p]], true};
-      return;
-    }
-  }
   for (std::size_t i = 0; i < cs.ec_gap.size(); ++i) {
     const std::int32_t a = cs.ec_a[i], b = cs.ec_b[i];
     const double gap = cs.ec_gap[i];
@@ -632,7 +625,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         if (mag > cap) fdrag *= (cap > 0 ? cap / mag : 0.0);
         force = fn * nrm + fdrag;
         ++held.count;
-        held.max = std::max(held.max, gap / m.block_size[b]);  // (the ignored part not counted)
+        const double ratio = gap / m.block_size[b];  // (the ignored part not counted)
+        if (ratio > held.max) held.max = ratio, held.at = p;
       }
       const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
       // work done on the contact by the relative motion: -F . du (F acts on the node)
@@ -650,9 +644,16 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   pen_ratio = std::max(pen_ratio, touched.max);
   // (c') edge-to-edge contacts (3D), their forces added to f first, in their list's order
   if (cs.edges) edge_contact_forces(m, cs, dt, active, pen_ratio);
+  if (pen_ratio > cs.max_pen_ratio) {  // the run's largest penetration grows: where
+    if (touched.at >= 0 && touched.max == pen_ratio) {
+      const auto p = static_cast<std::size_t>(touched.at);
+      cs.max_pen_at = {-1, cs.pair_node[p], cs.pair_block[p], -1, m.x[cs.pair_node[p]], true};
+    } else {
+      locate_edge_penetration(m, cs, pen_ratio);
+    }
+  }
   cs.active = active;
   cs.active_max = std::max(cs.active_max, active);
-  if (pen_ratio > cs.max_pen_ratio) locate_max_penetration(m, cs, pen_ratio);
   cs.max_pen_ratio = std::max(cs.max_pen_ratio, pen_ratio);
   // Gathers in a fixed order, each node's sum formed first and then added: node side, then face
   // side, each in pair order, so the sums are the same for any thread count. The node side in

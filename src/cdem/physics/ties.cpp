@@ -226,7 +226,9 @@ std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, st
       const std::size_t s0 = static_cast<std::size_t>(j) * np;
       for (int q = 0; q < np; ++q) {
         const std::size_t s = s0 + q;
-        if (!m.sp_tied[s] || (a_side ? m.sp_a[s] : m.sp_b[s]) != n) continue;
+        // (the node first: the points of this interface at other vertices may be another
+        // thread's, being untied now; tie_failure.cpp)
+        if ((a_side ? m.sp_a[s] : m.sp_b[s]) != n || !m.sp_tied[s]) continue;
         const std::int32_t other = a_side ? m.sp_b[s] : m.sp_a[s];
         if (other == b) return 0;
         if (std::find(node, node + n_reached, other) != node + n_reached) continue;
@@ -251,7 +253,11 @@ void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a, st
   std::int32_t* run = out + half / 2;                       // and its run marks
   std::sort(comp, comp + n_a);
   auto p = o0;
-  while (m.vtx_nodes[p] != a) ++p;
+  while (p < o1 && m.vtx_nodes[p] != a) ++p;
+  if (p == o1 || !m.vtx_run[o0]) {  // (a state not made here, e.g. a damaged checkpoint's)
+    split_vertex(m, v);
+    return;
+  }
   while (!m.vtx_run[p]) --p;                                // the cluster's first node
   auto q = p + 1;
   while (q < o1 && !m.vtx_run[q]) ++q;

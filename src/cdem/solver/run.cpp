@@ -91,8 +91,9 @@ std::string upgrade_signature(std::string sig) {
     while (end < sig.size() && sig[end] == '"') {
       const auto nl = sig.find('\n', end);
       const std::string line = sig.substr(end, (nl == std::string::npos ? sig.size() : nl) - end);
-      const auto close = line.find('"', 1);
-      lines.emplace_back(line.substr(1, close == std::string::npos ? std::string::npos : close - 1), line);
+      std::string key;  // (unescaped as written by resolved_case_toml: \" and \\)
+      for (std::size_t k = 1; k < line.size() && line[k] != '"'; ++k) key += line[k] == '\\' && k + 1 < line.size() ? line[++k] : line[k];
+      lines.emplace_back(key, line);
       end = nl == std::string::npos ? sig.size() : nl + 1;
     }
     std::sort(lines.begin(), lines.end());

@@ -86,7 +86,7 @@ void seed_gas(const Model& m, GasField& g, std::int32_t b, std::int32_t k, bool 
   if (!wall) return;
   for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
     const std::int32_t code = m.block_iface_list[e];
-    const std::size_t f = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
+    const std::size_t f = static_cast<std::size_t>(block_iface_index(code));
     const auto other = code > 0 ? m.iface_block_b[f] : m.iface_block_a[f];
     if (g.block_body[other] < 0) g.block_body[other] = k;
   }
@@ -365,7 +365,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         int nmine = 0;
         for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
           const std::int32_t code = m.block_iface_list[e];
-          const std::int32_t r = g.iface_load[static_cast<std::size_t>((code > 0 ? code : -code) - 1)];
+          const std::int32_t r = g.iface_load[static_cast<std::size_t>(block_iface_index(code))];
           if (r < 0) continue;
           assert(nmine < 4 && "a block with more than 4 faces");  // (tri, quad, tet: at most 4)
           mine[nmine++] = {r, code};
@@ -373,7 +373,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         std::sort(mine.begin(), mine.begin() + nmine);
         for (int j = 0; j < nmine; ++j) {
           const auto [r, code] = mine[j];
-          const auto i = static_cast<std::size_t>((code > 0 ? code : -code) - 1);
+          const auto i = static_cast<std::size_t>(block_iface_index(code));
           if (code > 0) {  // the block is A's side: -f
             for (int q = 0; q < np; ++q) m.f[m.sp_a[i * np + q]] -= force[r + q];
           } else {

@@ -40,6 +40,9 @@ struct BlockGroup {
 enum SpringState : std::uint8_t { kIntact = 0, kBroken = 1, kReleased = 2 };
 enum BreakMode : std::uint8_t { kModeNone = 0, kModeTension = 1, kModeShear = 2 };
 
+// The interface of an entry of Model::block_iface_list (i + 1 when the block is A, -(i + 1) when B).
+inline std::int32_t block_iface_index(std::int32_t code) { return (code > 0 ? code : -code) - 1; }
+
 struct Model {
   int dim = 0;
   int springs_per_iface = 0;
@@ -131,7 +134,7 @@ struct Model {
   // sp_fn[s] * iface_normal[s / springs_per_iface] + sp_fs[s] (spring_force, springs.hpp).
   std::vector<std::int32_t> block_iface_offset;  // CSR block -> interfaces, size n_blocks + 1
   std::vector<std::int32_t> block_iface_list;    // i + 1 when the block is A, -(i + 1) when B;
-                                                 // ascending i
+                                                 // ascending i (block_iface_index decodes it)
 
   // ---- tied interfaces (simulation.interfaces = "tied"; physics/ties.hpp) ----
   // The nodes split from one mesh vertex that are joined through tied spring points form a

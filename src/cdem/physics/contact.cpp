@@ -15,28 +15,6 @@
 #include "cdem/mesh/element_geometry.hpp"
 
 namespace cdem {
-namespace {
-
-// The edge contact that set this step's largest penetration ratio `ratio`, a new largest of the
-// run (the node pairs' comes out of their pass), found by the same quotient in list order (the
-// first of equals): serial, over the few edge contacts, and only when the run's largest grows.
-void locate_edge_penetration(const Model& m, ContactSet& cs, double ratio) {
-  auto& r = cs.max_pen_at;
-  for (std::size_t i = 0; i < cs.ec_gap.size(); ++i) {
-    const std::int32_t a = cs.ec_a[i], b = cs.ec_b[i];
-    const double gap = cs.ec_gap[i];
-    if (gap > 0 && gap / std::min(m.block_size[a], m.block_size[b]) == ratio) {
-      const std::int32_t n0 = m.block_first_node[a];
-      const int ea = cs.ec_key[i] / 6;
-      static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-      const double s = cs.ec_s[i];
-      r = {-1, -1, a, b, (1 - s) * m.x[n0 + kEdge[ea][0]] + s * m.x[n0 + kEdge[ea][1]], true};
-      return;
-    }
-  }
-}
-
-}  // namespace
 
 // The sleep of far pairs. With D_i the path length of node i since the last build (the sum of
 // |v_i| dt): since a test at t0 at which node n was found outside block b's grown bounding
@@ -649,7 +627,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       const auto p = static_cast<std::size_t>(touched.at);
       cs.max_pen_at = {-1, cs.pair_node[p], cs.pair_block[p], -1, m.x[cs.pair_node[p]], true};
     } else {
-      locate_edge_penetration(m, cs, pen_ratio);
+      locate_edge_penetration(m, cs, pen_ratio);  // (contact_edges.cpp)
     }
   }
   cs.active = active;

@@ -353,6 +353,10 @@ void carry_monotone(std::vector<T>& v, const std::vector<std::int32_t>& from, co
 // penetration / block size into pen_ratio).
 void index_edge_pairs(const Model& m, ContactSet& cs);
 void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& active, double& pen_ratio);
+// The edge contact that set this step's largest penetration ratio `ratio` (a new largest of the
+// run; the node pairs' comes out of their pass) into max_pen_at: found by the same quotient in
+// list order (the first of equals), serially over the few edge contacts.
+void locate_edge_penetration(const Model& m, ContactSet& cs, double ratio);
 
 // Bytes held by the contact set (capacity x element size of every array).
 std::size_t contact_bytes(const ContactSet& cs);

@@ -36,7 +36,7 @@ bool bonded(const Model& m, std::int32_t n, std::int32_t q) {
   for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
     const std::int32_t code = m.block_iface_list[e];
     const bool a_side = code > 0;
-    const std::size_t s0 = static_cast<std::size_t>((a_side ? code : -code) - 1) * np;
+    const std::size_t s0 = static_cast<std::size_t>(block_iface_index(code)) * np;
     for (int i = 0; i < np; ++i) {
       const std::size_t s = s0 + i;
       const std::int32_t mine = a_side ? m.sp_a[s] : m.sp_b[s];

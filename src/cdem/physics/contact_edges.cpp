@@ -356,6 +356,20 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   for_each_edge_array(cs, [&](auto&, auto& now) { now.reserve(room); });
 }
 
+void locate_edge_penetration(const Model& m, ContactSet& cs, double ratio) {
+  for (std::size_t i = 0; i < cs.ec_gap.size(); ++i) {
+    const std::int32_t a = cs.ec_a[i], b = cs.ec_b[i];
+    const double gap = cs.ec_gap[i];
+    if (gap > 0 && gap / std::min(m.block_size[a], m.block_size[b]) == ratio) {
+      const std::int32_t n0 = m.block_first_node[a];
+      const int ea = cs.ec_key[i] / 6;
+      const double s = cs.ec_s[i];
+      cs.max_pen_at = {-1, -1, a, b, (1 - s) * m.x[n0 + kTetEdges[ea][0]] + s * m.x[n0 + kTetEdges[ea][1]], true};
+      return;
+    }
+  }
+}
+
 void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& active, double& pen_ratio) {
   const auto nbp = static_cast<std::int64_t>(cs.bp_a.size());
   const double zeta = cs.cfg.damping_ratio;

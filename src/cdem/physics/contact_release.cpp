@@ -37,15 +37,12 @@
 namespace cdem {
 namespace {
 
-// The interface of an entry of Model::block_iface_list (i + 1 when the block is A, -(i + 1) when B).
-inline std::size_t iface_of(std::int32_t code) { return static_cast<std::size_t>(code > 0 ? code - 1 : -code - 1); }
-
 // Released spring points on the interfaces of block b (at most 6 faces x a few points: a byte).
 std::uint8_t released_on_block(const Model& m, std::int32_t b) {
   const int np = m.springs_per_iface;
   int count = 0;
   for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
-    const std::size_t i = iface_of(m.block_iface_list[e]);
+    const std::size_t i = static_cast<std::size_t>(block_iface_index(m.block_iface_list[e]));
     for (int q = 0; q < np; ++q) count += m.sp_state[i * np + q] == kReleased;
   }
   return static_cast<std::uint8_t>(std::min(count, 255));
@@ -85,7 +82,7 @@ int still_joined(const Model& m, std::int32_t a, std::int32_t b, std::int32_t* q
     const std::int32_t k = queue[head++];
     for (auto e = m.block_iface_offset[k]; e < m.block_iface_offset[k + 1]; ++e) {
       const std::int32_t code = m.block_iface_list[e];
-      const std::size_t i = iface_of(code);
+      const std::size_t i = static_cast<std::size_t>(block_iface_index(code));
       if (fully_released(m, i)) continue;
       const std::int32_t other = code > 0 ? m.iface_block_b[i] : m.iface_block_a[i];
       if (other == b) return 1;
@@ -179,7 +176,7 @@ double release_near_speed(const Model& m, ContactSet& cs, double reach) {
       const std::int64_t g = cs.rel_groups[r];
       for (std::int64_t b = g * kSleepGroup; b < std::min(nb, (g + 1) * kSleepGroup) && !split; ++b)
         for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1] && !split; ++e) {
-          const std::size_t i = iface_of(m.block_iface_list[e]);
+          const std::size_t i = static_cast<std::size_t>(block_iface_index(m.block_iface_list[e]));
           if (cs.ifc_free[i] || !fully_released(m, i)) continue;
           cs.ifc_free[i] = 1;
           const std::int32_t ba = m.iface_block_a[i], bb = m.iface_block_b[i];

@@ -146,7 +146,7 @@ void split_vertex(Model& m, std::int32_t v) {
     for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
       const std::int32_t code = m.block_iface_list[e];
       const bool a_side = code > 0;
-      const std::size_t s0 = static_cast<std::size_t>((a_side ? code : -code) - 1) * np;
+      const std::size_t s0 = static_cast<std::size_t>(block_iface_index(code)) * np;
       for (int q = 0; q < np; ++q) {
         const std::size_t s = s0 + q;
         if (!m.sp_tied[s]) continue;
@@ -222,7 +222,7 @@ std::size_t component_without(Model& m, std::int32_t a, std::int32_t block_a, st
     for (auto e = m.block_iface_offset[blk]; e < m.block_iface_offset[blk + 1]; ++e) {
       const std::int32_t code = m.block_iface_list[e];
       const bool a_side = code > 0;
-      const std::int32_t j = (a_side ? code : -code) - 1;
+      const std::int32_t j = block_iface_index(code);
       const std::size_t s0 = static_cast<std::size_t>(j) * np;
       for (int q = 0; q < np; ++q) {
         const std::size_t s = s0 + q;
@@ -261,37 +261,28 @@ void split_cluster(Model& m, std::int32_t v, std::int32_t a, std::size_t n_a, st
   while (!m.vtx_run[p]) --p;                                // the cluster's first node
   auto q = p + 1;
   while (q < o1 && !m.vtx_run[q]) ++q;
-  // The cluster's nodes (ascending) in two parts: X holds its first node, Y the others.
+  // The cluster's nodes (ascending) in two parts, in one pass: X holds its first node and takes
+  // the cluster's place; Y (listed after the component in the scratch) goes among the later
+  // clusters, before the first whose first node is larger.
   const bool first_in_a = std::binary_search(comp, comp + n_a, m.vtx_nodes[p]);
-  int w = 0;
-  for (auto k = p; k < q; ++k)                              // X, in place of the cluster
+  std::int32_t* y = comp + n_a;
+  int w = 0, ny = 0;
+  for (auto k = p; k < q; ++k) {
     if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) == first_in_a) {
       run[w] = w == 0;
       out[w++] = m.vtx_nodes[k];
+    } else {
+      y[ny++] = m.vtx_nodes[k];
     }
-  std::int32_t y0 = -1;                                     // Y's first node
-  for (auto k = p; k < q && y0 < 0; ++k)
-    if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) != first_in_a) y0 = m.vtx_nodes[k];
-  auto put_y = [&] {
-    for (auto k = p; k < q; ++k)
-      if (std::binary_search(comp, comp + n_a, m.vtx_nodes[k]) != first_in_a) {
-        run[w] = m.vtx_nodes[k] == y0;
-        out[w++] = m.vtx_nodes[k];
-      }
-  };
-  bool y_put = false;
-  for (auto k = q; k < o1; ++k) {                           // the later clusters, Y among them
-    if (!y_put && m.vtx_run[k] && m.vtx_nodes[k] > y0) {
-      put_y();
-      y_put = true;
-    }
-    run[w] = m.vtx_run[k];
-    out[w++] = m.vtx_nodes[k];
   }
-  if (!y_put) put_y();
-  for (int k = 0; k < w; ++k) {
-    m.vtx_nodes[p + k] = out[k];
-    m.vtx_run[p + k] = static_cast<std::uint8_t>(run[k]);
+  if (ny == 0) return;  // (b not in a's cluster: a state not made here; nothing to split)
+  auto k = q;
+  for (; k < o1 && !(m.vtx_run[k] && m.vtx_nodes[k] > y[0]); ++k) run[w] = m.vtx_run[k], out[w++] = m.vtx_nodes[k];
+  for (int j = 0; j < ny; ++j) run[w] = j == 0, out[w++] = y[j];
+  for (; k < o1; ++k) run[w] = m.vtx_run[k], out[w++] = m.vtx_nodes[k];
+  for (int j = 0; j < w; ++j) {
+    m.vtx_nodes[p + j] = out[j];
+    m.vtx_run[p + j] = static_cast<std::uint8_t>(run[j]);
   }
 }
 

@@ -98,6 +98,21 @@ struct TetGeom {
   int cand_edges = 0;
 };
 
+// The edge contacts' tests (contact_edges.cpp), here for the tests that compare them:
+// a tetrahedron's geometry from its nodes' positions and velocities (every edge a candidate);
+// the geometry of an edge pair in contact (the weights s, t of the closest points on the
+// pushed edge and on the other, the depth d and the normal n along which the pushed edge is
+// pushed); edge ea of A against edge eb of B (0: no contact, 1: A's edge pushed along +n, 2:
+// B's); and the edge pairs of A's edges ma and B's mb (bit sets) that it may find in contact
+// (bit 6 ea + eb; every pair it finds is among them).
+void tet_geom_of(const Vec3* x, const Vec3* v, double block_size, TetGeom& g);
+struct EdgeHit {
+  double s = 0, t = 0, d = 0;
+  Vec3 n;
+};
+int edge_hit_either(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit& h);
+std::uint64_t edge_candidates(const TetGeom& A, int ma, const TetGeom& B, int mb);
+
 struct ContactSet {
   ContactSettings cfg;
   bool enabled = false;

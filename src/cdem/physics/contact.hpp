@@ -223,7 +223,8 @@ struct ContactSet {
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
   // per block pair the edge pairs (bit 6 edge of a + edge of b) the count pass found touching
-  // this step: the fill pass tests only those again (sized at the rebuild)
+  // this step, and above them its other findings (contact_edges.cpp, kHitsNear): the fill pass
+  // tests only those pairs again (sized at the rebuild)
   std::vector<std::uint64_t> bp_hits;
   // this step: per block pair whether it is awake, and the awake ones in order (sized at the rebuild)
   std::vector<std::uint8_t> bp_awake_flag;

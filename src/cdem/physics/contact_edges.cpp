@@ -59,38 +59,60 @@ constexpr std::array<std::array<int, 2>, 6> kTetEdgeFaces = {{{2, 3}, {1, 3}, {1
 
 }  // namespace
 
-void tet_geom_of(const Vec3* x, const Vec3* v, double block_size, TetGeom& g) {
-  g.c = Vec3{};
+namespace {
+
+// A tetrahedron's nodes, velocities, bounding radius (about the centroid in g.c) and edges.
+void tet_nodes_and_edges(const Vec3* x, const Vec3* v, TetGeom& g) {
   for (int i = 0; i < 4; ++i) {
     g.x[i] = x[i];
     g.v[i] = v[i];
-    g.c += g.x[i];
   }
-  g.c *= 0.25;
   double r2 = 0;
   for (int i = 0; i < 4; ++i) r2 = std::max(r2, dot(g.x[i] - g.c, g.x[i] - g.c));
   g.r = std::sqrt(r2);
-  g.tol = 1e-3 * block_size;
-  const LocalFaces lf = local_faces(ElemType::Tet4);
-  for (int k = 0; k < 4; ++k) {
-    const Vec3 a0 = g.x[lf.f[k][0]];
-    g.a0[k] = a0;
-    g.n[k] = normalized(cross(g.x[lf.f[k][1]] - a0, g.x[lf.f[k][2]] - a0));
-  }
-  g.rho = simplex_tolerance_reach(ElemType::Tet4, x, g.a0, g.n, g.tol);
   for (int e = 0; e < 6; ++e) {
     const Vec3 p0 = g.x[kTetEdges[e][0]], p1 = g.x[kTetEdges[e][1]];
     g.em[e] = 0.5 * (p0 + p1);
     g.el[e] = norm(p1 - p0);
   }
+}
+
+}  // namespace
+
+void tet_geom_of(const Vec3* x, const Vec3* v, double block_size, TetGeom& g) {
+  g.c = Vec3{};
+  for (int i = 0; i < 4; ++i) g.c += x[i];
+  g.c *= 0.25;
+  g.tol = 1e-3 * block_size;
+  const LocalFaces lf = local_faces(ElemType::Tet4);
+  for (int k = 0; k < 4; ++k) {
+    const Vec3 a0 = x[lf.f[k][0]];
+    g.a0[k] = a0;
+    g.n[k] = normalized(cross(x[lf.f[k][1]] - a0, x[lf.f[k][2]] - a0));
+  }
+  g.rho = simplex_tolerance_reach(ElemType::Tet4, x, g.a0, g.n, g.tol);
+  tet_nodes_and_edges(x, v, g);
   g.cand_edges = 63;
 }
 
 namespace {
 
+// Block b's geometry; its centroid, tolerance and face planes are those of the node pairs' step
+// (contact.cpp, cb_geom) when it is one of their blocks (slot >= 0): the same expressions on the
+// same positions (both files without contraction), so the same bits, computed once.
 void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g) {
-  const std::int32_t n0 = m.block_first_node[b];
-  tet_geom_of(&m.x[n0], &m.v[n0], m.block_size[b], g);
+  const std::int32_t n0 = m.block_first_node[b], slot = cs.block_slot[b];
+  if (slot >= 0) {
+    const BlockPlanes& bp = cs.cb_geom[static_cast<std::size_t>(slot)];
+    g.c = bp.c;
+    g.tol = bp.tol;
+    g.a0 = bp.a0;
+    g.n = bp.n;
+    g.rho = bp.rho;
+    tet_nodes_and_edges(&m.x[n0], &m.v[n0], g);
+  } else {
+    tet_geom_of(&m.x[n0], &m.v[n0], m.block_size[b], g);
+  }
   g.cand_edges = 0;
   for (int e = 0; e < 6; ++e)
     if (cs.face_cand[4 * b + kTetEdgeFaces[e][0]] || cs.face_cand[4 * b + kTetEdgeFaces[e][1]])
@@ -230,6 +252,9 @@ int edge_hit_either(const TetGeom& A, int ea, const TetGeom& B, int eb, EdgeHit&
 namespace {
 
 inline std::int32_t edge_key(int ea, int eb) { return 6 * ea + eb; }
+// ContactSet::bp_hits: bits 0-35 the edge pairs found touching (edge_key), then the block pair's
+// edges of a and of b that may reach into the other (6 bits each) and whether the pair is near
+constexpr int kHitsMaskA = 36, kHitsMaskB = 42, kHitsNear = 48;
 
 }  // namespace
 
@@ -591,7 +616,11 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
           if (hit || find_prev(cs, plo, phi, edge_key(ea, eb)) >= 0) ++count;
         }
       cs.bp_count[j + 1] = count;
-      cs.bp_hits[j] = hits;
+      // (and for the fill pass, what it would find again: whether the blocks are near, and their
+      // edges that may reach into each other)
+      cs.bp_hits[j] = hits | (near ? (std::uint64_t{1} << kHitsNear) | static_cast<std::uint64_t>(ma) << kHitsMaskA |
+                                         static_cast<std::uint64_t>(mb) << kHitsMaskB
+                                   : 0);
     }
   });
   cs.block_pair_tests += nawake;  // (every awake block pair is tested)
@@ -609,12 +638,10 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       const TetGeom& B = cs.eb_geom[cs.bp_ib[j]];
       const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
       auto o = static_cast<std::size_t>(cs.bp_count[j]);
-      int a_in = 0, b_in = 0;
-      double apart_by = 0;
-      const bool near = dot(A.c - B.c, A.c - B.c) <= (A.r + B.r) * (A.r + B.r) &&
-                        (A.cand_edges != 0) && (B.cand_edges != 0) && !separated(A, B, b_in, apart_by) &&
-                        !separated(B, A, a_in, apart_by);
-      const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
+      // (the count pass's findings: the blocks near, each one's edges that may reach the other)
+      const std::uint64_t found = cs.bp_hits[j];
+      const bool near = found >> kHitsNear & 1;
+      const int ma = static_cast<int>(found >> kHitsMaskA & 63), mb = static_cast<int>(found >> kHitsMaskB & 63);
       int ignored = -1;  // (holds_ignored_overlap either way, looked up at the first need)
       for (int ea = 0; ea < 6; ++ea)
         for (int eb = 0; eb < 6; ++eb) {

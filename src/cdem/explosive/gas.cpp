@@ -1,9 +1,12 @@
 #include "cdem/explosive/gas.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <exception>
 
 #include "cdem/core/loop_split.hpp"
 #include "cdem/core/prefetch.hpp"
@@ -75,7 +78,7 @@ void init_gas_field(const Model& m, GasField& g, const std::vector<std::string>&
     g.list_body.reserve(ni);
     g.list_fill_area.reserve(ni);
     g.list_vent.reserve(ni);
-    g.load_first.reserve(ni);
+    g.thread_loads.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
     g.load_power.reserve(ni * static_cast<std::size_t>(m.springs_per_iface));
   }
   g.scratch.assign(2 * g.bodies.size(), 0.0);
@@ -133,27 +136,9 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       }
     }
   };
-  // 0. cracks: which listed interfaces are open and their apertures (the gathers of positions
-  // are most of this function's cost): in parallel, each interface on its own, so the serial
-  // passes below see the same values for any thread count
-  if (cracks) {
-    g.list_open.resize(nlist);  // (within the room init_gas_field made)
-    g.list_aperture.resize(nlist);
-    const auto nl = static_cast<std::int64_t>(nlist);
-    static LoopSplit split_open;
-    split_open.run(nl, [&](const LoopSplit::Range& part) {
-      for (std::int64_t k = part.lo; k < part.hi; ++k) {
-        if (k + kPrefetchAhead < nl) prefetch_ahead(k + kPrefetchAhead, false);
-        const std::size_t i = iface_at(static_cast<std::size_t>(k));
-        const bool o = open(i);
-        g.list_open[k] = o;
-        g.list_aperture[k] = o ? aperture(i) : 0.0;
-      }
-    });
-  }
-  // 1. cracks: fill, volume, vents (the gas state of the last step sets the front speed, the
-  // choked flux per density of each body: computed once per body, the same value for all its
-  // cracks)
+  // 1. cracks: which listed interfaces are open, their apertures, fill, volume, vents (the gas
+  // state of the last step sets the front speed, the choked flux per density of each body:
+  // computed once per body, the same value for all its cracks)
   if (cracks) {
     g.front_speed.assign(nb, 0.0);  // (no reallocation after the first step)
     for (std::size_t k = 0; k < nb; ++k) {
@@ -163,10 +148,11 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       const double rho = mgas / vol;
       g.front_speed[k] = choked_mass_flux(gs.pressure, rho, products_gamma(eos[gs.eos], gs.rho_w / rho)) / rho;
     }
-    // (a) In parallel, the interfaces whose gas body is known: the fill of the crack front and
-    // each one's terms of its body's crack volume and vent area. What an interface does here
-    // reads nothing another writes in this pass (the bodies, front speeds and block sizes are
-    // fixed during it).
+    // (a) In parallel, each interface on its own: whether it is open and its aperture (the
+    // gathers of positions are most of this function's cost); for those whose gas body is known,
+    // the fill of the crack front and their terms of the body's crack volume and vent area.
+    // What an interface does here reads nothing another writes in this pass (the bodies, front
+    // speeds and block sizes are fixed during it).
     // (b) Serially, in list order: the interfaces still without a body (they take it from their
     // blocks, which the fronts completed before them in the list have just reached), the
     // blocks reached by a completed front, and the sums. The same operations in the same order
@@ -196,7 +182,9 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
                            : 0.0;
     };
     enum : std::uint8_t { kSkip = 0, kTerms = 1, kReached = 2, kSerial = 4 };
-    g.list_state.resize(nlist);  // (within the room init_gas_field made)
+    g.list_open.resize(nlist);  // (within the room init_gas_field made)
+    g.list_aperture.resize(nlist);
+    g.list_state.resize(nlist);
     g.list_body.resize(nlist);
     g.list_fill_area.resize(nlist);
     g.list_vent.resize(nlist);
@@ -211,12 +199,16 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           prefetch_for_write_at(ia, g.iface_fill.data());
         }
         if (k + kPrefetchAhead < nl) {
+          prefetch_ahead(k + kPrefetchAhead, false);
           const std::size_t ia = iface_at(static_cast<std::size_t>(k + kPrefetchAhead));
           for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
             prefetch_at(static_cast<std::size_t>(blk), g.block_exterior.data(), m.block_size.data());
         }
+        const bool is_open = open(iface_at(static_cast<std::size_t>(k)));
+        g.list_open[k] = is_open;
+        g.list_aperture[k] = is_open ? aperture(iface_at(static_cast<std::size_t>(k))) : 0.0;
         std::uint8_t st = kSkip;
-        if (g.list_open[k]) {
+        if (is_open) {
           const std::size_t i = iface_at(static_cast<std::size_t>(k));
           const std::int32_t d = g.iface_body[i];
           if (d < 0) {
@@ -300,12 +292,26 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       gs.m_cracks = rho * gs.v_cracks;
     }
   }
-  // 3. the filled cracks' faces pushed apart by f P: the pressures in parallel (into the
-  // apertures' array, no longer needed), then the loads (recorded in list order)
+  // 3. the filled cracks' faces pushed apart by f P, in one parallel region: each thread forms
+  // the pressures of its contiguous range of the list (into the apertures' array, no longer
+  // needed) and counts its loads; their places in the record follow in list order (the threads'
+  // counts summed in thread order, which is list order); then each thread writes its range's
+  // loads and their power terms at those places. Then the forces added per block in parallel,
+  // each node's in record order, and the power terms summed in record order, serially (below:
+  // the same sums, in the same order, as adding the loads one by one, bitwise the same for any
+  // thread count).
   if (cracks) {
     const auto nl = static_cast<std::int64_t>(nlist);
-    static LoopSplit split_pressure;
-    split_pressure.run(nl, [&](const LoopSplit::Range& part) {
+    if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; g.thread_loads.size() < want)
+      g.thread_loads.assign(want, 0);  // (the thread count grew: rare)
+    static LoopSplit split_loads;
+    std::size_t first = 0;
+    std::int64_t nload = 0;
+    std::exception_ptr failed;
+#pragma omp parallel
+    {
+      const LoopSplit::Range part = split_loads.begin(nl);
+      std::int64_t mine = 0;
       for (std::int64_t k = part.lo; k < part.hi; ++k) {
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
         const std::int32_t d = g.iface_body[i];
@@ -315,41 +321,45 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         if (!(p > 0)) p = 0;
         g.iface_gas_p[i] = static_cast<float>(p);
         g.list_aperture[k] = p;
+        if (p > 0) mine += np;
       }
-    });
-    // the loads: their places in the record in list order (a prefix count), then each
-    // interface's loads written and their power terms formed in parallel; then the forces added
-    // per block in parallel, each node's in record order, and the power terms summed in record
-    // order, serially (below: the same sums, in the same order, as adding the loads one by one,
-    // bitwise the same for any thread count)
-    g.load_first.resize(nlist);  // (within the room init_gas_field made)
-    std::int64_t nload = 0;
-    for (std::size_t k = 0; k < nlist; ++k) {
-      g.load_first[k] = nload;
-      if (g.list_aperture[k] > 0) nload += np;
-    }
-    const std::size_t first = out.append_pairs(static_cast<std::size_t>(nload));
-    g.load_power.resize(static_cast<std::size_t>(nload));
-    static LoopSplit split_loads;
-    split_loads.run(nl, [&](const LoopSplit::Range& part) {
-      for (std::int64_t k = part.lo; k < part.hi; ++k) {
-        if (k + kPrefetchAhead < nl && g.list_aperture[k + kPrefetchAhead] > 0)
+      g.thread_loads[static_cast<std::size_t>(part.thread) + 1] = mine;
+#pragma omp barrier
+#pragma omp single
+      {
+        g.thread_loads[0] = 0;
+        for (int t = 0; t < part.threads; ++t) g.thread_loads[t + 1] += g.thread_loads[t];
+        nload = g.thread_loads[static_cast<std::size_t>(part.threads)];
+        try {  // (growing the record allocates at the first steps; an exception must not leave the region)
+          first = out.append_pairs(static_cast<std::size_t>(nload));
+          g.load_power.resize(static_cast<std::size_t>(nload));  // (within the room init_gas_field made)
+        } catch (...) {
+          failed = std::current_exception();
+        }
+      }
+      std::int64_t r = g.thread_loads[static_cast<std::size_t>(part.thread)];
+      for (std::int64_t k = part.lo; k < part.hi && !failed; ++k) {
+        if (k + kPrefetchAhead < part.hi && g.list_aperture[k + kPrefetchAhead] > 0)
           prefetch_ahead(k + kPrefetchAhead, true);
         const double p = g.list_aperture[k];
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
-        g.iface_load[i] = p > 0 ? static_cast<std::int32_t>(g.load_first[k]) : -1;
+        g.iface_load[i] = p > 0 ? static_cast<std::int32_t>(r) : -1;
         if (!(p > 0)) continue;
         const Vec3 f = (p * m.sp_area.v[i]) * m.iface_normal[i];  // on B's node, along n (A to B)
         for (int q = 0; q < np; ++q) {
-          const auto r = static_cast<std::size_t>(g.load_first[k] + q);
+          const auto rq = static_cast<std::size_t>(r + q);
           const std::int32_t b = m.sp_b[i * np + q], a = m.sp_a[i * np + q];
-          out.pair_b[first + r] = b;
-          out.pair_a[first + r] = a;
-          out.pair_force[first + r] = f;
-          g.load_power[r] = dot(f, m.v[b] - m.v[a]);
+          out.pair_b[first + rq] = b;
+          out.pair_a[first + rq] = a;
+          out.pair_force[first + rq] = f;
+          g.load_power[rq] = dot(f, m.v[b] - m.v[a]);
         }
+        r += np;
       }
-    });
+      split_loads.end(part);
+    }
+    split_loads.update();
+    if (failed) std::rethrow_exception(failed);
     // The forces: per block in parallel, each node's loads in the record's order (its block's
     // loaded interfaces sorted by their places in the record, whatever the list's order), so
     // each node's sum is the one adding the record in order gives, bit for bit (each node is

@@ -88,10 +88,11 @@ struct GasField {
   std::vector<std::uint8_t> list_state;
   std::vector<std::int32_t> list_body;
   std::vector<double> list_fill_area, list_vent;
-  // this step, the crack-face loads: per list entry its first load (prefix count), per load its
-  // power term f . (v_b - v_a), both filled in parallel before the loads are applied (each
-  // node's in record order) and their power terms summed in order
-  std::vector<std::int64_t> load_first;
+  // this step, the crack-face loads: per thread the first load of its range of the list
+  // (prefix count of the threads' loads), per load its power term f . (v_b - v_a), filled in
+  // parallel before the loads are applied (each node's in record order) and their power terms
+  // summed in order
+  std::vector<std::int64_t> thread_loads;
   std::vector<double> load_power;
   // per interface, this step: the index of its first crack-face load among them, -1 for none
   // (an interface off the list has none: in the tied mode the list only grows)

@@ -168,8 +168,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       cs.cb_drift[2 * j + 1] = dmax;
     }
   });
+  // (a block whose tolerance reach exceeds the cap wakes all its pairs this step: its largest
+  // drift bound +inf, flagged here while its geometry is at hand; rare: a sliver, a block crushed
+  // flat or inverted)
   static LoopSplit split_planes;
-  split_planes.run(ncb, [&](const LoopSplit::Range& part) {
+  const int over_cap = split_planes.run_reduce(ncb, 0, [&](const LoopSplit::Range& part) {
+    int over = 0;
     for (std::int64_t j = part.lo; j < part.hi; ++j) {
       const std::int32_t b = cs.cblock[j], n0 = m.block_first_node[b];
       const int nbn = m.block_first_node[b + 1] - n0;
@@ -202,17 +206,13 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         }
       }
       bp.rho = simplex_tolerance_reach(m.block_type[b], &m.x[n0], bp.a0, bp.n, bp.tol);
+      if (!(bp.rho <= kContactRhoCap * bp.tol)) {
+        cs.cb_drift[2 * j + 1] = std::numeric_limits<double>::infinity();
+        over = 1;
+      }
     }
-  });
-  // (a block whose tolerance reach exceeds the cap wakes all its pairs this step;
-  // rare: a sliver, a block crushed flat or inverted)
-  int over_cap = 0;
-#pragma omp parallel for schedule(static) reduction(| : over_cap)
-  for (std::int64_t j = 0; j < ncb; ++j)
-    if (!(cs.cb_geom[j].rho <= kContactRhoCap * cs.cb_geom[j].tol)) {
-      cs.cb_drift[2 * j + 1] = std::numeric_limits<double>::infinity();
-      over_cap = 1;
-    }
+    return over;
+  }, [](int x, int y) { return x | y; });
   if (over_cap)
     for (std::int64_t j = 0; j < ncb; ++j)
       if (cs.cb_drift[2 * j + 1] == std::numeric_limits<double>::infinity())

@@ -204,12 +204,12 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
             prefetch_at(static_cast<std::size_t>(blk), g.block_exterior.data(), m.block_size.data());
         }
-        const bool is_open = open(iface_at(static_cast<std::size_t>(k)));
+        const std::size_t i = iface_at(static_cast<std::size_t>(k));
+        const bool is_open = open(i);
         g.list_open[k] = is_open;
-        g.list_aperture[k] = is_open ? aperture(iface_at(static_cast<std::size_t>(k))) : 0.0;
+        g.list_aperture[k] = is_open ? aperture(i) : 0.0;
         std::uint8_t st = kSkip;
         if (is_open) {
-          const std::size_t i = iface_at(static_cast<std::size_t>(k));
           const std::int32_t d = g.iface_body[i];
           if (d < 0) {
             st = kSerial;
@@ -324,6 +324,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         if (p > 0) mine += np;
       }
       g.thread_loads[static_cast<std::size_t>(part.thread) + 1] = mine;
+      const double first_half = omp_get_wtime() - part.t0;  // (the thread's work, not the wait)
 #pragma omp barrier
 #pragma omp single
       {
@@ -337,6 +338,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           failed = std::current_exception();
         }
       }
+      const double t_second = omp_get_wtime();
       std::int64_t r = g.thread_loads[static_cast<std::size_t>(part.thread)];
       for (std::int64_t k = part.lo; k < part.hi && !failed; ++k) {
         if (k + kPrefetchAhead < part.hi && g.list_aperture[k + kPrefetchAhead] > 0)
@@ -356,7 +358,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         }
         r += np;
       }
-      split_loads.end(part);
+      split_loads.record(part.thread, part.threads, first_half + (omp_get_wtime() - t_second));
     }
     split_loads.update();
     if (failed) std::rethrow_exception(failed);

@@ -267,6 +267,7 @@ constexpr int kHitsMaskA = 36, kHitsMaskB = 42, kHitsNear = 48;
 // pair rejected here is one edge_hit_either rejects; the few left are tested by it in full.
 // (One pair at a time those tests branched on data, most of the count pass's time.)
 std::uint64_t edge_candidates(const TetGeom& A, int ma, const TetGeom& B, int mb) {
+  if (ma == 0 || mb == 0) return 0;
   constexpr int W = 8;  // B's 6 edges and 2 lanes of padding (copies of edge 0, masked out)
   alignas(64) double qx[W], qy[W], qz[W], bx[W], by[W], bz[W], mx[W], my[W], mz[W], lb[W];
   for (int l = 0; l < W; ++l) {

@@ -222,19 +222,20 @@ struct ContactSet {
   // pair this step's contact count (prefix sums) and the range of its contacts of the last step
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
+  // (bp_count: per awake block pair, by its place in bp_awake)
   // per block pair the edge pairs (bit 6 edge of a + edge of b) the count pass found touching
   // this step, and above them its other findings (contact_edges.cpp, kHitsNear): the fill pass
   // tests only those pairs again (sized at the rebuild)
   std::vector<std::uint64_t> bp_hits;
-  // this step: per block pair whether it is awake, and the awake ones in order (sized at the rebuild)
-  std::vector<std::uint8_t> bp_awake_flag;
-  std::vector<std::int32_t> bp_awake;
+  // this step: the awake block pairs in order, the scratch they are listed in per thread, each
+  // thread's count (prefix sums; sized at the rebuild); the block pairs whose bp_prev_n was set
+  // (cleared at the next step)
+  std::vector<std::int32_t> bp_awake, bp_scratch, bp_prev_set;
+  std::vector<std::int64_t> bp_awake_count;
   // the distinct blocks of the block pairs (ascending; rebuilt), each pair's two indices among
-  // them, and per block this step's bounding sphere (centre, radius) and geometry (each computed
-  // once per step, not once per pair)
+  // them, and per block this step's geometry, its bounding sphere among it (computed once per
+  // step for the blocks of the awake pairs, not once per pair)
   std::vector<std::int32_t> eb_block, bp_ia, bp_ib;
-  std::vector<Vec3> eb_c;
-  std::vector<double> eb_r;
   std::vector<std::uint8_t> eb_need;  // this step: 1 its geometry is needed, 2 it has it
   std::vector<TetGeom> eb_geom;
   // far block pairs sleep (contact_edges.cpp): per block of the pairs the smallest and largest

@@ -72,15 +72,6 @@ void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g) 
       g.cand_edges |= 1 << e;
 }
 
-// The block's centroid and bounding radius (the first, cheap test of a block pair).
-void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r) {
-  const std::int32_t n0 = m.block_first_node[b];
-  c = 0.25 * (m.x[n0] + m.x[n0 + 1] + m.x[n0 + 2] + m.x[n0 + 3]);
-  double r2 = 0;
-  for (int i = 0; i < 4; ++i) r2 = std::max(r2, dot(m.x[n0 + i] - c, m.x[n0 + i] - c));
-  r = std::sqrt(r2);
-}
-
 namespace {
 
 // Per set of a tetrahedron's nodes (4 bits), the edges with both ends in it (6 bits).

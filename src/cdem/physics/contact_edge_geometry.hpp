@@ -23,7 +23,6 @@ inline constexpr int kHitsMaskA = 36, kHitsMaskB = 42, kHitsNear = 48;
 // Block b's geometry this step (the node pairs' face planes when it is one of their blocks).
 void tet_geom(const Model& m, const ContactSet& cs, std::int32_t b, TetGeom& g);
 // The block's centroid and bounding radius (the first, cheap test of a block pair).
-void tet_sphere(const Model& m, std::int32_t b, Vec3& c, double& r);
 // Is every node of S in front of one face plane of G (beyond tol)? Else `edges`: the edges of S
 // that may have a point inside G; when separated, `gap`: how far (contact_edge_geometry.cpp).
 bool separated(const TetGeom& G, const TetGeom& S, int& edges, double& gap);

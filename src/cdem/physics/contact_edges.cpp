@@ -92,6 +92,13 @@ std::int64_t find_prev(const ContactSet& cs, std::int64_t lo, std::int64_t hi, s
 // node off its contact face (its whole depth ignored for that reason: a vertex sliding past
 // the face's edge, where the edge contacts are what should hold). The node pairs of this step
 // (contact.cpp runs before the edges), sorted by node.
+// The keys of the previous step's contacts of a block pair, [lo, hi), as bits.
+std::uint64_t prev_keys(const ContactSet& cs, std::int64_t lo, std::int64_t hi) {
+  std::uint64_t keys = 0;
+  for (std::int64_t q = lo; q < hi; ++q) keys |= std::uint64_t{1} << cs.ec_key[q];
+  return keys;
+}
+
 bool holds_ignored_overlap(const Model& m, const ContactSet& cs, std::int32_t a, std::int32_t b) {
   const std::int32_t body_b = cs.body[b];
   for (auto n = m.block_first_node[a]; n < m.block_first_node[a + 1]; ++n)
@@ -163,8 +170,6 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
     cs.bp_ib[j] = off[cs.bp_b[j]];
   }
   const std::size_t neb = cs.eb_block.size();
-  cs.eb_c.resize(neb);
-  cs.eb_r.resize(neb);
   cs.eb_need.assign(neb, 0);
   cs.eb_geom.resize(neb);
   cs.eb_drift.assign(2 * neb, 0.0);
@@ -178,11 +183,13 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_prev.assign(cs.bp_a.size() + 1, 0);
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
   cs.bp_hits.assign(cs.bp_a.size(), 0);
-  cs.bp_awake_flag.assign(cs.bp_a.size(), 0);
+  cs.bp_scratch.resize(cs.bp_a.size());
+  cs.bp_prev_set.clear();  // (bp_prev_n is 0 everywhere)
   cs.bp_awake.reserve(cs.bp_a.size());
   // room for the contacts without allocating in a step (grown only if a step needs more)
   const std::size_t room = std::max<std::size_t>(64, 2 * static_cast<std::size_t>(cs.ec_active_max));
   for_each_edge_array(cs, [&](auto&, auto& now) { now.reserve(room); });
+  cs.bp_prev_set.reserve(room);
 }
 
 void locate_edge_penetration(const Model& m, ContactSet& cs, double ratio) {
@@ -203,30 +210,41 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   const auto nbp = static_cast<std::int64_t>(cs.bp_a.size());
   const double zeta = cs.cfg.damping_ratio;
   cs.ec_matched.assign(cs.ec_a.size(), 0);
-  // the previous contacts of each block pair: [prev_begin[j], prev_begin[j + 1]) when their
-  // blocks are bp j's (both lists sorted by block pair)
+  // the previous contacts of each block pair: [bp_prev[j], bp_prev[j] + bp_prev_n[j]) are those
+  // of bp j's blocks (both lists sorted by block pair; bp_prev_n 0 for a pair without any).
+  // Found per block pair of the contacts (a few thousand) by a search of the pairs, not by a
+  // walk over every pair; the counts set at the last step are cleared first.
   {
-    std::size_t q = 0;
-    for (std::int64_t j = 0; j < nbp; ++j) {
-      const std::int32_t a = cs.bp_a[j], b = cs.bp_b[j];
-      while (q < cs.ec_a.size() && (cs.ec_a[q] < a || (cs.ec_a[q] == a && cs.ec_b[q] < b))) ++q;
-      cs.bp_prev[j] = static_cast<std::int64_t>(q);
-      std::size_t e = q;
-      while (e < cs.ec_a.size() && cs.ec_a[e] == a && cs.ec_b[e] == b) ++e;
-      cs.bp_prev_n[j] = static_cast<std::int32_t>(e - q);
+    for (const std::int32_t j : cs.bp_prev_set) cs.bp_prev_n[j] = 0;
+    cs.bp_prev_set.clear();
+    const std::size_t nq = cs.ec_a.size();
+    for (std::size_t q = 0; q < nq;) {
+      const std::int32_t a = cs.ec_a[q], b = cs.ec_b[q];
+      std::size_t e = q + 1;
+      while (e < nq && cs.ec_a[e] == a && cs.ec_b[e] == b) ++e;
+      const auto first = std::lower_bound(cs.bp_a.begin(), cs.bp_a.end(), a);
+      const auto last = std::upper_bound(first, cs.bp_a.end(), a);
+      const auto lo = cs.bp_b.begin() + (first - cs.bp_a.begin()), hi = cs.bp_b.begin() + (last - cs.bp_a.begin());
+      const auto it = std::lower_bound(lo, hi, b);
+      if (it != hi && *it == b) {  // (else a rebuild dropped the pair: its contacts are closed below)
+        const auto j = static_cast<std::int32_t>(it - cs.bp_b.begin());
+        cs.bp_prev[j] = static_cast<std::int64_t>(q);
+        cs.bp_prev_n[j] = static_cast<std::int32_t>(e - q);
+        cs.bp_prev_set.push_back(j);
+      }
       q = e;
     }
   }
-  // (0) per block its bounding sphere and drift bounds (node_drift: the path length of each node
-  // since the build; the largest +inf when its tolerance reach is over the cap): those of the
-  // node pairs' step when the block is one of theirs (cb_drift, contact.cpp), else from its
-  // geometry, computed here (eb_need 2: it has it)
+  // (0) per block its drift bounds (node_drift: the path length of each node since the build; the
+  // largest +inf when its tolerance reach is over the cap): those of the node pairs' step when
+  // the block is one of theirs (cb_drift, contact.cpp), else from its geometry, computed here
+  // (eb_need 2: it has it). Its bounding sphere (the first test of an awake pair) is in its
+  // geometry, computed only for the blocks of awake pairs.
   const auto neb = static_cast<std::int64_t>(cs.eb_block.size());
-  static LoopSplit split_spheres;
-  split_spheres.run(neb, [&](const LoopSplit::Range& part) {
+  static LoopSplit split_drift;
+  split_drift.run(neb, [&](const LoopSplit::Range& part) {
     for (std::int64_t i = part.lo; i < part.hi; ++i) {
       const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
-      tet_sphere(m, b, cs.eb_c[i], cs.eb_r[i]);
       const std::int32_t slot = cs.block_slot[b];
       cs.eb_need[i] = slot < 0 ? 2 : 0;
       if (slot >= 0) {
@@ -263,22 +281,37 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       need[i] = 1;
     }
   };
-  static LoopSplit split_awake;
-  split_awake.run(nbp, [&](const LoopSplit::Range& part) {
-    for (std::int64_t j = part.lo; j < part.hi; ++j) {
-      const bool awake = !asleep(j);
-      cs.bp_awake_flag[j] = awake;
-      if (awake) {
-        mark(cs.bp_ia[j]);
-        mark(cs.bp_ib[j]);
-      }
-    }
-  });
   // the awake block pairs in order (the count pass below runs over them alone, their blocks'
-  // geometry prefetched: 2 x 10 cache lines scattered over the blocks, most of its time)
-  cs.bp_awake.clear();  // (within its capacity)
-  for (std::int64_t j = 0; j < nbp; ++j)
-    if (cs.bp_awake_flag[j]) cs.bp_awake.push_back(static_cast<std::int32_t>(j));
+  // geometry prefetched: 2 x 10 cache lines scattered over the blocks, most of its time): each
+  // thread lists those of its range at the range's start in a scratch array, then copies them to
+  // its offset (the counts of the threads before it), so the list is in pair order for any
+  // thread count
+  if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.bp_awake_count.size() < want)
+    cs.bp_awake_count.assign(want, 0);
+  static LoopSplit split_awake;
+  std::int32_t* const awake_scratch = cs.bp_scratch.data();
+#pragma omp parallel
+  {
+    const LoopSplit::Range part = split_awake.begin(nbp);
+    std::int64_t n = 0;
+    for (std::int64_t j = part.lo; j < part.hi; ++j) {
+      if (asleep(j)) continue;
+      awake_scratch[part.lo + n++] = static_cast<std::int32_t>(j);
+      mark(cs.bp_ia[j]);
+      mark(cs.bp_ib[j]);
+    }
+    split_awake.end(part);
+    cs.bp_awake_count[part.thread + 1] = n;
+#pragma omp barrier
+#pragma omp single
+    {
+      cs.bp_awake_count[0] = 0;
+      for (int k = 0; k < part.threads; ++k) cs.bp_awake_count[k + 1] += cs.bp_awake_count[k];
+      cs.bp_awake.resize(static_cast<std::size_t>(cs.bp_awake_count[part.threads]));  // (within its capacity)
+    }
+    std::copy(awake_scratch + part.lo, awake_scratch + part.lo + n, cs.bp_awake.data() + cs.bp_awake_count[part.thread]);
+  }
+  split_awake.update();
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < neb; ++i)
     if (cs.eb_need[i] == 1) tet_geom(m, cs, cs.eb_block[i], cs.eb_geom[i]);
@@ -297,8 +330,10 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   // So the pair is not tested again before dD_a + dD_b reaches delta / 3, or delta -
   // (kContactRhoCap + 1) max(tol_a, tol_b) (one tol for rounding): no contact is missed, the
   // results are the same bit for bit. Pairs that held contacts are tested every step.
-  std::fill(cs.bp_count.begin(), cs.bp_count.end(), 0);  // (the asleep pairs: none)
+  // (bp_count: per awake pair, by its place in the awake list; an asleep pair holds no contact
+  // of the last step, so it has none now)
   const auto nawake = static_cast<std::int64_t>(cs.bp_awake.size());
+  cs.bp_count[0] = 0;
   static LoopSplit split_count;
   split_count.run(nawake, [&](const LoopSplit::Range& part) {
     for (std::int64_t w = part.lo; w < part.hi; ++w) {
@@ -306,19 +341,17 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
         const std::int32_t ja = cs.bp_awake[w + kPrefetchAhead];
         prefetch_object(cs.eb_geom[cs.bp_ia[ja]]);
         prefetch_object(cs.eb_geom[cs.bp_ib[ja]]);
-        prefetch_at(static_cast<std::size_t>(cs.bp_ia[ja]), cs.eb_c.data(), cs.eb_r.data());
-        prefetch_at(static_cast<std::size_t>(cs.bp_ib[ja]), cs.eb_c.data(), cs.eb_r.data());
       }
       const std::int64_t j = cs.bp_awake[w];
       const std::int32_t ia = cs.bp_ia[j], ib = cs.bp_ib[j];
       const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
       const double drift_min = cs.eb_drift[2 * ia] + cs.eb_drift[2 * ib];
-      const Vec3 ca = cs.eb_c[ia], cb = cs.eb_c[ib];
-      const double ra = cs.eb_r[ia], rb = cs.eb_r[ib];
-      const double dc2 = dot(ca - cb, ca - cb);
-      bool near = dc2 <= (ra + rb) * (ra + rb);
       const TetGeom& A = cs.eb_geom[ia];
       const TetGeom& B = cs.eb_geom[ib];
+      const Vec3 ca = A.c, cb = B.c;
+      const double ra = A.r, rb = B.r;
+      const double dc2 = dot(ca - cb, ca - cb);
+      bool near = dc2 <= (ra + rb) * (ra + rb);
       if (!near && plo == phi) {  // (most pairs: blocks apart; the longer of the two sleeps)
         double delta = (std::sqrt(dc2) - (ra + rb)) / 3.0, gap = 0;
         int unused = 0;
@@ -326,7 +359,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
             (separated(A, B, unused, gap) || separated(B, A, unused, gap)))
           delta = std::max(delta, gap - (kContactRhoCap + 1) * std::max(A.tol, B.tol));
         cs.bp_wake[j] = drift_min + delta;
-        cs.bp_count[j + 1] = 0;
+        cs.bp_count[w + 1] = 0;
         continue;
       }
       int a_in = 0, b_in = 0;  // the edges of A that may reach into B, of B into A
@@ -336,23 +369,20 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       if (apart && plo == phi && A.rho <= kContactRhoCap * A.tol && B.rho <= kContactRhoCap * B.tol)
         cs.bp_wake[j] = drift_min + (gap - (kContactRhoCap + 1) * std::max(A.tol, B.tol));
       if (!near && plo == phi) {  // (most of the rest: blocks side by side across a crack)
-        cs.bp_count[j + 1] = 0;
+        cs.bp_count[w + 1] = 0;
         continue;
       }
       const int ma = A.cand_edges & a_in, mb = B.cand_edges & b_in;
-      std::int32_t count = 0;
       std::uint64_t hits = 0;
       const std::uint64_t maybe = near ? edge_candidates(A, ma, B, mb) : 0;
-      for (int ea = 0; ea < 6; ++ea)
-        for (int eb = 0; eb < 6; ++eb) {
-          EdgeHit h;
-          // both roles (the edge pair in contact either way round is one contact: A's edge into
-          // B or B's into A)
-          const bool hit = (maybe >> edge_key(ea, eb) & 1) && edge_hit_either(A, ea, B, eb, h) != 0;
-          if (hit) hits |= std::uint64_t{1} << edge_key(ea, eb);
-          if (hit || find_prev(cs, plo, phi, edge_key(ea, eb)) >= 0) ++count;
-        }
-      cs.bp_count[j + 1] = count;
+      // the candidates' full test, both roles (the edge pair in contact either way round is one
+      // contact: A's edge into B or B's into A); a contact now or at the last step is one entry
+      for (std::uint64_t left = maybe; left != 0; left &= left - 1) {
+        const int key = __builtin_ctzll(left);
+        EdgeHit h;
+        if (edge_hit_either(A, key / 6, B, key % 6, h) != 0) hits |= std::uint64_t{1} << key;
+      }
+      cs.bp_count[w + 1] = __builtin_popcountll(hits | prev_keys(cs, plo, phi));
       // (and for the fill pass, what it would find again: whether the blocks are near, and their
       // edges that may reach into each other)
       cs.bp_hits[j] = hits | (near ? (std::uint64_t{1} << kHitsNear) | static_cast<std::uint64_t>(ma) << kHitsMaskA |
@@ -361,36 +391,40 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
     }
   });
   cs.block_pair_tests += nawake;  // (every awake block pair is tested)
-  for (std::int64_t j = 0; j < nbp; ++j) cs.bp_count[j + 1] += cs.bp_count[j];
-  const auto nec = static_cast<std::size_t>(cs.bp_count[nbp]);
+  for (std::int64_t w = 0; w < nawake; ++w) cs.bp_count[w + 1] += cs.bp_count[w];
+  const auto nec = static_cast<std::size_t>(cs.bp_count[nawake]);
   for_each_edge_array(cs, [&](auto&, auto& now) { now.resize(nec); });
   // (2) the same tests again, now writing each contact at its offset with its force and energy
   static LoopSplit split_fill;
-  const LoopSplit::CountMax touched = split_fill.run_reduce(nbp, LoopSplit::CountMax{}, [&](const LoopSplit::Range& part) {
+  const LoopSplit::CountMax touched = split_fill.run_reduce(nawake, LoopSplit::CountMax{}, [&](const LoopSplit::Range& part) {
     LoopSplit::CountMax held;
-    for (std::int64_t j = part.lo; j < part.hi; ++j) {
-      if (cs.bp_count[j + 1] == cs.bp_count[j]) continue;  // nothing here
+    for (std::int64_t w = part.lo; w < part.hi; ++w) {
+      if (cs.bp_count[w + 1] == cs.bp_count[w]) continue;  // nothing here
+      const std::int64_t j = cs.bp_awake[w];
       const std::int32_t a = cs.bp_a[j], b = cs.bp_b[j];
       const TetGeom& A = cs.eb_geom[cs.bp_ia[j]];
       const TetGeom& B = cs.eb_geom[cs.bp_ib[j]];
       const std::int64_t plo = cs.bp_prev[j], phi = plo + cs.bp_prev_n[j];
-      auto o = static_cast<std::size_t>(cs.bp_count[j]);
-      // (the count pass's findings: the blocks near, each one's edges that may reach the other)
+      auto o = static_cast<std::size_t>(cs.bp_count[w]);
+      // (the count pass's findings: the edge pairs touching, the blocks near, each one's edges
+      // that may reach the other)
       const std::uint64_t found = cs.bp_hits[j];
       const bool near = found >> kHitsNear & 1;
       const int ma = static_cast<int>(found >> kHitsMaskA & 63), mb = static_cast<int>(found >> kHitsMaskB & 63);
+      const std::uint64_t hit_keys = found & ((std::uint64_t{1} << 36) - 1);
       int ignored = -1;  // (holds_ignored_overlap either way, looked up at the first need)
-      for (int ea = 0; ea < 6; ++ea)
-        for (int eb = 0; eb < 6; ++eb) {
+      // the edge pairs touching now or in contact at the last step, in key order (6 ea + eb)
+      for (std::uint64_t left = hit_keys | prev_keys(cs, plo, phi); left != 0; left &= left - 1) {
+          const std::int32_t key = __builtin_ctzll(left);
+          const int ea = key / 6, eb = key % 6;
           const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
           EdgeHit h;
           // the same test as the count pass's, where that found a hit (the others found none)
-          const int role = near && cand && (cs.bp_hits[j] >> edge_key(ea, eb) & 1) ? edge_hit_either(A, ea, B, eb, h) : 0;
+          const int role = near && cand && (hit_keys >> key & 1) ? edge_hit_either(A, ea, B, eb, h) : 0;
           const bool hit = role != 0;
           // the edge pushed along +n is a's (else b's); without a hit, a's unless both roles were
           // tried (which side a kept contact's weights are read from)
           const bool a_pushed = role == 1 || !(near && cand);
-          const std::int32_t key = edge_key(ea, eb);
           const std::int64_t q = find_prev(cs, plo, phi, key);
           if (!hit && q < 0) continue;
           if (q >= 0) cs.ec_matched[q] = 1;

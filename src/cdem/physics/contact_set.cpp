@@ -192,8 +192,8 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
            cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand, cs.blk_released, cs.blk_near, cs.ifc_free,
            cs.grp_lo, cs.grp_hi, cs.rel_lo, cs.rel_hi, cs.rel_groups, cs.join_queue, cs.join_hash) +
-         b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.bp_hits, cs.bp_awake_flag, cs.bp_awake, cs.eb_block, cs.bp_ia, cs.bp_ib,
-           cs.eb_c, cs.eb_r, cs.eb_need, cs.eb_geom, cs.eb_drift, cs.bp_wake, cs.ec_a, cs.ec_b, cs.ec_key, cs.ec_d0, cs.ec_gap,
+         b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.bp_hits, cs.bp_awake, cs.bp_scratch, cs.bp_prev_set, cs.bp_awake_count, cs.eb_block, cs.bp_ia, cs.bp_ib,
+           cs.eb_need, cs.eb_geom, cs.eb_drift, cs.bp_wake, cs.ec_a, cs.ec_b, cs.ec_key, cs.ec_d0, cs.ec_gap,
            cs.ec_k, cs.ec_diss, cs.ec_s, cs.ec_t, cs.ec_force, cs.ec_ft, cs.ecn_a, cs.ecn_b, cs.ecn_key,
            cs.ecn_d0, cs.ecn_gap, cs.ecn_k, cs.ecn_diss, cs.ecn_s, cs.ecn_t, cs.ecn_force, cs.ecn_ft,
            cs.ec_matched);

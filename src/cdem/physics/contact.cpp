@@ -331,6 +331,8 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   }
   split_near.update();
   const auto nnear = static_cast<std::int64_t>(cs.near.size());
+  cs.near_node.resize(static_cast<std::size_t>(nnear));  // (within their capacity)
+  cs.near_forced.resize(static_cast<std::size_t>(nnear));
   // (a') geometry of every near pair
   static LoopSplit split_geom;
   split_geom.run(nnear, [&](const LoopSplit::Range& part) {
@@ -349,6 +351,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       const std::int32_t p = cs.near[ii];
       const std::int32_t n = cs.pair_node[p], b = cs.pair_block[p];
+      cs.near_node[ii] = n;
       const Vec3 x = m.x[n];
       // The node against every face of the block: inside when behind all of them; the contact
       // face is the nearest candidate face (largest g, the first of equals).
@@ -466,8 +469,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
   {
     cs.near_group.clear();  // the start of each node's near pairs in `near` (+ the end)
     for (std::int64_t i = 0; i < nnear; ++i)
-      if (i == 0 || cs.pair_node[cs.near[i]] != cs.pair_node[cs.near[i - 1]])
-        cs.near_group.push_back(static_cast<std::int32_t>(i));
+      if (i == 0 || cs.near_node[i] != cs.near_node[i - 1]) cs.near_group.push_back(static_cast<std::int32_t>(i));
     cs.near_group.push_back(static_cast<std::int32_t>(nnear));
     const auto nd = static_cast<std::int64_t>(cs.near_group.size()) - 1;
     static LoopSplit split_owner;
@@ -615,6 +617,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       cs.pair_gap[p] = gap;
       cs.pair_force[p] = force;
       cs.pair_kf[p] = in_contact ? cs.pair_kf_now[p] : static_cast<std::int8_t>(-1);
+      cs.near_forced[ii] = force.x != 0 || force.y != 0 || force.z != 0;
     }
     return held;
   }, LoopSplit::CountMax::join);
@@ -643,19 +646,17 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
     for (std::int64_t d = part.lo; d < part.hi; ++d) {
       Vec3 acc{};
       bool any = false;
-      for (auto i = cs.near_group[d]; i < cs.near_group[d + 1]; ++i) {
-        const Vec3 F = cs.pair_force[cs.near[i]];
-        if (F.x != 0 || F.y != 0 || F.z != 0) acc += F, any = true;
-      }
-      if (any) m.f[cs.pair_node[cs.near[cs.near_group[d]]]] += acc;
+      for (auto i = cs.near_group[d]; i < cs.near_group[d + 1]; ++i)
+        if (cs.near_forced[i]) acc += cs.pair_force[cs.near[i]], any = true;
+      if (any) m.f[cs.near_node[cs.near_group[d]]] += acc;
     }
   });
   cs.face_touched.clear();
   cs.face_sum.clear();
   for (std::int64_t i = 0; i < nnear; ++i) {
+    if (!cs.near_forced[i]) continue;
     const std::int32_t p = cs.near[i];
     const Vec3 F = cs.pair_force[p];
-    if (!(F.x != 0 || F.y != 0 || F.z != 0)) continue;
     const std::int32_t b = cs.pair_block[p], n0 = m.block_first_node[b];
     const int nbn = m.block_first_node[b + 1] - n0;
     for (int k = 0; k < nbn; ++k) {

@@ -186,6 +186,10 @@ struct ContactSet {
   // pair): each thread's awake pairs at the start of its range of pairs, overwritten by its near
   // pairs as they are found, before the copy to `near`
   std::vector<std::int32_t> near, near_group, near_scratch;
+  // per near pair (by its place in `near`) its node, and whether it holds a force this step: read
+  // in order by the passes after the narrow phase instead of through the pair's index
+  std::vector<std::int32_t> near_node;
+  std::vector<std::uint8_t> near_forced;
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
   // far pairs sleep (contact.cpp, kSleepRate): per node its path length (since the first build
   // or the checkpoint loaded: a rebuild keeps it, and the wakes of the pairs that stay with it),

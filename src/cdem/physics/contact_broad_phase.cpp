@@ -420,6 +420,8 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.face_touched.reserve(4 * cs.cblock.size());
   cs.face_sum.reserve(4 * cs.cblock.size());
   cs.near.reserve(npair);
+  cs.near_node.reserve(npair);
+  cs.near_forced.reserve(npair);
   cs.near_group.reserve(npair + 1);
   cs.near_count.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
   index_edge_pairs(m, cs);

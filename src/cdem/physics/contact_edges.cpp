@@ -39,6 +39,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -378,11 +379,11 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       // the candidates' full test, both roles (the edge pair in contact either way round is one
       // contact: A's edge into B or B's into A); a contact now or at the last step is one entry
       for (std::uint64_t left = maybe; left != 0; left &= left - 1) {
-        const int key = __builtin_ctzll(left);
+        const int key = std::countr_zero(left);
         EdgeHit h;
         if (edge_hit_either(A, key / 6, B, key % 6, h) != 0) hits |= std::uint64_t{1} << key;
       }
-      cs.bp_count[w + 1] = __builtin_popcountll(hits | prev_keys(cs, plo, phi));
+      cs.bp_count[w + 1] = std::popcount(hits | prev_keys(cs, plo, phi));
       // (and for the fill pass, what it would find again: whether the blocks are near, and their
       // edges that may reach into each other)
       cs.bp_hits[j] = hits | (near ? (std::uint64_t{1} << kHitsNear) | static_cast<std::uint64_t>(ma) << kHitsMaskA |
@@ -415,7 +416,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       int ignored = -1;  // (holds_ignored_overlap either way, looked up at the first need)
       // the edge pairs touching now or in contact at the last step, in key order (6 ea + eb)
       for (std::uint64_t left = hit_keys | prev_keys(cs, plo, phi); left != 0; left &= left - 1) {
-          const std::int32_t key = __builtin_ctzll(left);
+          const std::int32_t key = std::countr_zero(left);
           const int ea = key / 6, eb = key % 6;
           const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
           EdgeHit h;

@@ -185,6 +185,7 @@ void index_edge_pairs(const Model& m, ContactSet& cs) {
   cs.bp_prev_n.assign(cs.bp_a.size(), 0);
   cs.bp_hits.assign(cs.bp_a.size(), 0);
   cs.bp_scratch.resize(cs.bp_a.size());
+  cs.bp_awake_count.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);  // (a step allocates nothing)
   cs.bp_prev_set.clear();  // (bp_prev_n is 0 everywhere)
   cs.bp_awake.reserve(cs.bp_a.size());
   // room for the contacts without allocating in a step (grown only if a step needs more)
@@ -286,7 +287,8 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   // geometry prefetched: 2 x 10 cache lines scattered over the blocks, most of its time): each
   // thread lists those of its range at the range's start in a scratch array, then copies them to
   // its offset (the counts of the threads before it), so the list is in pair order for any
-  // thread count
+  // thread count (the counts sized at the last build; the thread count may have grown since, as
+  // for the node pairs' near list, contact.cpp)
   if (const auto want = static_cast<std::size_t>(omp_get_max_threads()) + 1; cs.bp_awake_count.size() < want)
     cs.bp_awake_count.assign(want, 0);
   static LoopSplit split_awake;

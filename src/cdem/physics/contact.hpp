@@ -223,10 +223,10 @@ struct ContactSet {
   // ---- edge-to-edge contact (3D, contact_edges.cpp) ----
   bool edges = false;
   // the block pairs (a < b, of different bodies, sorted) whose edges are tested (rebuilt), per
-  // pair this step's contact count (prefix sums) and the range of its contacts of the last step
+  // awake pair (by its place in bp_awake) this step's contact count (prefix sums), per pair the
+  // range of its contacts of the last step
   std::vector<std::int32_t> bp_a, bp_b, bp_prev_n;
   std::vector<std::int64_t> bp_count, bp_prev;
-  // (bp_count: per awake block pair, by its place in bp_awake)
   // per block pair the edge pairs (bit 6 edge of a + edge of b) the count pass found touching
   // this step, and above them its other findings (contact_edges.cpp, kHitsNear): the fill pass
   // tests only those pairs again (sized at the rebuild)

@@ -414,124 +414,124 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       const std::uint64_t found = cs.bp_hits[j];
       const bool near = found >> kHitsNear & 1;
       const int ma = static_cast<int>(found >> kHitsMaskA & 63), mb = static_cast<int>(found >> kHitsMaskB & 63);
-      const std::uint64_t hit_keys = found & ((std::uint64_t{1} << 36) - 1);
+      const std::uint64_t hit_keys = found & ((std::uint64_t{1} << kHitsMaskA) - 1);
       int ignored = -1;  // (holds_ignored_overlap either way, looked up at the first need)
       // the edge pairs touching now or in contact at the last step, in key order (6 ea + eb)
       for (std::uint64_t left = hit_keys | prev_keys(cs, plo, phi); left != 0; left &= left - 1) {
-          const std::int32_t key = std::countr_zero(left);
-          const int ea = key / 6, eb = key % 6;
-          const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
-          EdgeHit h;
-          // the same test as the count pass's, where that found a hit (the others found none)
-          const int role = near && cand && (hit_keys >> key & 1) ? edge_hit_either(A, ea, B, eb, h) : 0;
-          const bool hit = role != 0;
-          // the edge pushed along +n is a's (else b's); without a hit, a's unless both roles were
-          // tried (which side a kept contact's weights are read from)
-          const bool a_pushed = role == 1 || !(near && cand);
-          const std::int64_t q = find_prev(cs, plo, phi, key);
-          if (!hit && q < 0) continue;
-          if (q >= 0) cs.ec_matched[q] = 1;
-          // the edge pair's two edges as P (pushed along +n) and Q, with the weights of their nodes
-          const TetGeom& P = a_pushed ? A : B;
-          const TetGeom& Q = a_pushed ? B : A;
-          const int ep = a_pushed ? ea : eb, eq = a_pushed ? eb : ea;
-          const double s = hit ? h.s : (q >= 0 ? (a_pushed ? cs.ec_s[q] : cs.ec_t[q]) : 0.5);
-          const double t = hit ? h.t : (q >= 0 ? (a_pushed ? cs.ec_t[q] : cs.ec_s[q]) : 0.5);
-          const Vec3 vp = (1 - s) * P.v[kTetEdges[ep][0]] + s * P.v[kTetEdges[ep][1]];
-          const Vec3 vq = (1 - t) * Q.v[kTetEdges[eq][0]] + t * Q.v[kTetEdges[eq][1]];
-          const Vec3 du = dt * (vp - vq);  // relative displacement of P's point over the last step
-          // stiffness and mass: the smallest of the four nodes'
-          const std::int32_t np0 = m.block_first_node[a_pushed ? a : b], nq0 = m.block_first_node[a_pushed ? b : a];
-          const std::int32_t nodes[4] = {np0 + kTetEdges[ep][0], np0 + kTetEdges[ep][1],
-                                         nq0 + kTetEdges[eq][0], nq0 + kTetEdges[eq][1]};
-          double k = cs.kc[nodes[0]], mass = m.mass[nodes[0]];
-          for (int i = 1; i < 4; ++i) k = std::min(k, cs.kc[nodes[i]]), mass = std::min(mass, m.mass[nodes[i]]);
-          k *= kEdgeShare;
-          // the force on a's edge last step (stored with a as the reference side)
-          const Vec3 fa_old = q >= 0 ? cs.ec_force[q] : Vec3{};
-          const Vec3 fp_old = a_pushed ? fa_old : -1.0 * fa_old;
-          const double gap_old = q >= 0 ? cs.ec_gap[q] : 0.0;
-          const double k_old = q >= 0 ? cs.ec_k[q] : k;
-          const Vec3 fta_old = q >= 0 ? cs.ec_ft[q] : Vec3{};  // tangential part, on a's edge
-          const Vec3 ftp_old = a_pushed ? fta_old : -1.0 * fta_old;
-          const double kt_old = cs.shear_ratio * k_old;
-          const double e_old = 0.5 * k_old * gap_old * gap_old +
-                               (kt_old > 0 ? 0.5 * dot(ftp_old, ftp_old) / kt_old : 0.0);
-          double d0 = q >= 0 ? cs.ec_d0[q] : 0.0;
-          Vec3 fp{}, ftp{};
-          double gap = 0;
-          const double kt = cs.shear_ratio * k;
-          // A crossing first seen deeper than two steps' approach is no touch this contact can
-          // resolve (blocks that overlap by a good part of their size, after crushing near a
-          // charge): it is left to the node-to-face contacts. Taken up with its depth ignored, such
-          // a crossing lost its ignored depth each time its gap came to zero and was taken up anew
-          // the next step, pushing a step's approach back at once: -2.1 MJ of energy from nothing
-          // by 5.4 ms in the coarse SPEC 5.3 cylinder, scheme B (docs/verification_contact.md).
-          // (the depth d = (x_q - x_p) . n grows at the rate -vn: the approach is max(0, -vn); an
-          // edge pair moving apart has no approach, and its depth none of this step's)
-          const double approach = std::max(0.0, -dot(vp - vq, h.n));
-          const bool deep_new = hit && q < 0 && h.d > 2.0 * approach * dt + std::min(P.tol, Q.tol);
-          if (hit && !deep_new) {
-            const double vn = dot(vp - vq, h.n);
-            // at first touch, depth beyond one step's approach is ignored (d0): an edge crossing is
-            // found in the step it happens, and a larger allowance would push the rest back at
-            // once (energy from nothing). Moving apart, the whole depth: two bodies that overlap and
-            // part show crossings of small depth as the overlap closes, never approached (the
-            // deep touch test of test_contact.cpp gained 4.5 % of its energy with |vn| here).
-            // Inside an overlap the node contacts ignore (a node of one block holds a contact in
-            // the other's body with an ignored depth), a crossing not pressing yet ignores its
-            // depth too: as two bodies that overlap part or close, the edges of one sweep through
-            // the other's, each a new crossing approached this step, and pushing that back held
-            // them together (-10 % of the kinetic energy as two overlapping cubes parted, the
-            // deep-touch test of test_contact.cpp).
-            if ((q < 0 || gap_old == 0) && ignored < 0)
-              ignored = holds_ignored_overlap(m, cs, a, b) || holds_ignored_overlap(m, cs, b, a);
-            if (q < 0 || gap_old == 0) d0 = std::max(d0, ignored ? h.d : h.d - approach * dt);
-            // in contact: the penetration grows at most by this step's approach; a jump of the
-            // closest points or of the common normal (edges turning, the pushed edge changing) is
-            // no motion and is not pushed back (a guard: in the runs measured it changed nothing)
-            else
-              d0 = std::max(d0, h.d - gap_old - approach * dt);
-            d0 = std::max(0.0, std::min(d0, h.d));
-            gap = h.d - d0;
-            const double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * mass) : 0.0;
-            const double fn = gap > 0 ? std::max(0.0, k * gap - cdamp * vn) : 0.0;
-            if (gap > 0) {
-              // Coulomb friction, as for the node pairs: the tangential spring turned into the
-              // current tangent plane (magnitude kept), incremented by -k_t du_t, capped at mu F_n
-              const double mu = cs.mu[static_cast<std::size_t>(m.block_region[a]) * cs.nreg + m.block_region[b]];
-              ftp = ftp_old;
-              const double f2 = dot(ftp, ftp);
-              ftp -= dot(ftp, h.n) * h.n;
-              const double fp2 = dot(ftp, ftp);
-              if (fp2 > 0) ftp *= std::sqrt(f2 / fp2);
-              const Vec3 du_t = du - dot(du, h.n) * h.n;
-              ftp -= kt * du_t;
-              const double cap = mu * fn, mag = norm(ftp);
-              if (mag > cap) ftp *= (cap > 0 ? cap / mag : 0.0);
-            }
-            fp = fn * h.n + ftp;
-            if (gap > 0) {
-              ++held.count;
-              held.max = std::max(held.max, gap / std::min(m.block_size[a], m.block_size[b]));
-            }
-          } else {
-            d0 = 0;
+        const std::int32_t key = std::countr_zero(left);
+        const int ea = key / 6, eb = key % 6;
+        const bool cand = (ma >> ea & 1) && (mb >> eb & 1);
+        EdgeHit h;
+        // the same test as the count pass's, where that found a hit (the others found none)
+        const int role = near && cand && (hit_keys >> key & 1) ? edge_hit_either(A, ea, B, eb, h) : 0;
+        const bool hit = role != 0;
+        // the edge pushed along +n is a's (else b's); without a hit, a's unless both roles were
+        // tried (which side a kept contact's weights are read from)
+        const bool a_pushed = role == 1 || !(near && cand);
+        const std::int64_t q = find_prev(cs, plo, phi, key);
+        if (!hit && q < 0) continue;
+        if (q >= 0) cs.ec_matched[q] = 1;
+        // the edge pair's two edges as P (pushed along +n) and Q, with the weights of their nodes
+        const TetGeom& P = a_pushed ? A : B;
+        const TetGeom& Q = a_pushed ? B : A;
+        const int ep = a_pushed ? ea : eb, eq = a_pushed ? eb : ea;
+        const double s = hit ? h.s : (q >= 0 ? (a_pushed ? cs.ec_s[q] : cs.ec_t[q]) : 0.5);
+        const double t = hit ? h.t : (q >= 0 ? (a_pushed ? cs.ec_t[q] : cs.ec_s[q]) : 0.5);
+        const Vec3 vp = (1 - s) * P.v[kTetEdges[ep][0]] + s * P.v[kTetEdges[ep][1]];
+        const Vec3 vq = (1 - t) * Q.v[kTetEdges[eq][0]] + t * Q.v[kTetEdges[eq][1]];
+        const Vec3 du = dt * (vp - vq);  // relative displacement of P's point over the last step
+        // stiffness and mass: the smallest of the four nodes'
+        const std::int32_t np0 = m.block_first_node[a_pushed ? a : b], nq0 = m.block_first_node[a_pushed ? b : a];
+        const std::int32_t nodes[4] = {np0 + kTetEdges[ep][0], np0 + kTetEdges[ep][1],
+                                       nq0 + kTetEdges[eq][0], nq0 + kTetEdges[eq][1]};
+        double k = cs.kc[nodes[0]], mass = m.mass[nodes[0]];
+        for (int i = 1; i < 4; ++i) k = std::min(k, cs.kc[nodes[i]]), mass = std::min(mass, m.mass[nodes[i]]);
+        k *= kEdgeShare;
+        // the force on a's edge last step (stored with a as the reference side)
+        const Vec3 fa_old = q >= 0 ? cs.ec_force[q] : Vec3{};
+        const Vec3 fp_old = a_pushed ? fa_old : -1.0 * fa_old;
+        const double gap_old = q >= 0 ? cs.ec_gap[q] : 0.0;
+        const double k_old = q >= 0 ? cs.ec_k[q] : k;
+        const Vec3 fta_old = q >= 0 ? cs.ec_ft[q] : Vec3{};  // tangential part, on a's edge
+        const Vec3 ftp_old = a_pushed ? fta_old : -1.0 * fta_old;
+        const double kt_old = cs.shear_ratio * k_old;
+        const double e_old = 0.5 * k_old * gap_old * gap_old +
+                             (kt_old > 0 ? 0.5 * dot(ftp_old, ftp_old) / kt_old : 0.0);
+        double d0 = q >= 0 ? cs.ec_d0[q] : 0.0;
+        Vec3 fp{}, ftp{};
+        double gap = 0;
+        const double kt = cs.shear_ratio * k;
+        // A crossing first seen deeper than two steps' approach is no touch this contact can
+        // resolve (blocks that overlap by a good part of their size, after crushing near a
+        // charge): it is left to the node-to-face contacts. Taken up with its depth ignored, such
+        // a crossing lost its ignored depth each time its gap came to zero and was taken up anew
+        // the next step, pushing a step's approach back at once: -2.1 MJ of energy from nothing
+        // by 5.4 ms in the coarse SPEC 5.3 cylinder, scheme B (docs/verification_contact.md).
+        // (the depth d = (x_q - x_p) . n grows at the rate -vn: the approach is max(0, -vn); an
+        // edge pair moving apart has no approach, and its depth none of this step's)
+        const double approach = std::max(0.0, -dot(vp - vq, h.n));
+        const bool deep_new = hit && q < 0 && h.d > 2.0 * approach * dt + std::min(P.tol, Q.tol);
+        if (hit && !deep_new) {
+          const double vn = dot(vp - vq, h.n);
+          // at first touch, depth beyond one step's approach is ignored (d0): an edge crossing is
+          // found in the step it happens, and a larger allowance would push the rest back at
+          // once (energy from nothing). Moving apart, the whole depth: two bodies that overlap and
+          // part show crossings of small depth as the overlap closes, never approached (the
+          // deep touch test of test_contact.cpp gained 4.5 % of its energy with |vn| here).
+          // Inside an overlap the node contacts ignore (a node of one block holds a contact in
+          // the other's body with an ignored depth), a crossing not pressing yet ignores its
+          // depth too: as two bodies that overlap part or close, the edges of one sweep through
+          // the other's, each a new crossing approached this step, and pushing that back held
+          // them together (-10 % of the kinetic energy as two overlapping cubes parted, the
+          // deep-touch test of test_contact.cpp).
+          if ((q < 0 || gap_old == 0) && ignored < 0)
+            ignored = holds_ignored_overlap(m, cs, a, b) || holds_ignored_overlap(m, cs, b, a);
+          if (q < 0 || gap_old == 0) d0 = std::max(d0, ignored ? h.d : h.d - approach * dt);
+          // in contact: the penetration grows at most by this step's approach; a jump of the
+          // closest points or of the common normal (edges turning, the pushed edge changing) is
+          // no motion and is not pushed back (a guard: in the runs measured it changed nothing)
+          else
+            d0 = std::max(d0, h.d - gap_old - approach * dt);
+          d0 = std::max(0.0, std::min(d0, h.d));
+          gap = h.d - d0;
+          const double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * mass) : 0.0;
+          const double fn = gap > 0 ? std::max(0.0, k * gap - cdamp * vn) : 0.0;
+          if (gap > 0) {
+            // Coulomb friction, as for the node pairs: the tangential spring turned into the
+            // current tangent plane (magnitude kept), incremented by -k_t du_t, capped at mu F_n
+            const double mu = cs.mu[static_cast<std::size_t>(m.block_region[a]) * cs.nreg + m.block_region[b]];
+            ftp = ftp_old;
+            const double f2 = dot(ftp, ftp);
+            ftp -= dot(ftp, h.n) * h.n;
+            const double fp2 = dot(ftp, ftp);
+            if (fp2 > 0) ftp *= std::sqrt(f2 / fp2);
+            const Vec3 du_t = du - dot(du, h.n) * h.n;
+            ftp -= kt * du_t;
+            const double cap = mu * fn, mag = norm(ftp);
+            if (mag > cap) ftp *= (cap > 0 ? cap / mag : 0.0);
           }
-          const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ftp, ftp) / kt : 0.0);
-          cs.ecn_diss[o] = (q >= 0 ? cs.ec_diss[q] : 0.0) - 0.5 * dot(fp_old + fp, du) - (e_new - e_old);
-          cs.ecn_a[o] = a;
-          cs.ecn_b[o] = b;
-          cs.ecn_key[o] = key;
-          cs.ecn_d0[o] = d0;
-          cs.ecn_gap[o] = gap;
-          cs.ecn_k[o] = k;
-          cs.ecn_force[o] = a_pushed ? fp : -1.0 * fp;
-          cs.ecn_ft[o] = a_pushed ? ftp : -1.0 * ftp;
-          cs.ecn_s[o] = a_pushed ? s : t;  // the weights on a's edge and on b's
-          cs.ecn_t[o] = a_pushed ? t : s;
-          ++o;
+          fp = fn * h.n + ftp;
+          if (gap > 0) {
+            ++held.count;
+            held.max = std::max(held.max, gap / std::min(m.block_size[a], m.block_size[b]));
+          }
+        } else {
+          d0 = 0;
         }
+        const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ftp, ftp) / kt : 0.0);
+        cs.ecn_diss[o] = (q >= 0 ? cs.ec_diss[q] : 0.0) - 0.5 * dot(fp_old + fp, du) - (e_new - e_old);
+        cs.ecn_a[o] = a;
+        cs.ecn_b[o] = b;
+        cs.ecn_key[o] = key;
+        cs.ecn_d0[o] = d0;
+        cs.ecn_gap[o] = gap;
+        cs.ecn_k[o] = k;
+        cs.ecn_force[o] = a_pushed ? fp : -1.0 * fp;
+        cs.ecn_ft[o] = a_pushed ? ftp : -1.0 * ftp;
+        cs.ecn_s[o] = a_pushed ? s : t;  // the weights on a's edge and on b's
+        cs.ecn_t[o] = a_pushed ? t : s;
+        ++o;
+      }
     }
     return held;
   }, LoopSplit::CountMax::join);

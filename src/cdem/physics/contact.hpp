@@ -217,6 +217,11 @@ struct ContactSet {
   std::vector<Vec3> face_sum;
   // work space of the rebuild
   std::vector<std::int32_t> body, bucket_offset, bucket_entry;
+  // per bucket entry, 2 x its block's body + 1 if it has a released candidate face (a bucket's
+  // entries ordered by it), and the end of its run of equal keys: the node search passes over
+  // the entries of its own body that it may not pair with by the key alone
+  std::vector<std::uint32_t> bucket_key;
+  std::vector<std::int32_t> bucket_run_end;
   std::vector<std::uint8_t> on_released;
   std::vector<std::uint8_t> face_cand;   // per face slot: 1 when a candidate face
 

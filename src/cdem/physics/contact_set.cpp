@@ -190,7 +190,7 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_gwake, cs.cb_pair_start, cs.cb_pair, cs.grp_speed, cs.grp_clock, cs.grp_pair_start,
            cs.grp_nbr_start, cs.grp_nbr,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,
-           cs.bucket_offset, cs.bucket_entry, cs.on_released, cs.face_cand, cs.blk_released, cs.blk_near, cs.ifc_free,
+           cs.bucket_offset, cs.bucket_entry, cs.bucket_key, cs.bucket_run_end, cs.on_released, cs.face_cand, cs.blk_released, cs.blk_near, cs.ifc_free,
            cs.grp_lo, cs.grp_hi, cs.rel_lo, cs.rel_hi, cs.rel_groups, cs.join_queue, cs.join_hash) +
          b(cs.bp_a, cs.bp_b, cs.bp_prev_n, cs.bp_count, cs.bp_prev, cs.bp_hits, cs.bp_awake, cs.bp_scratch, cs.bp_prev_set, cs.bp_awake_count, cs.eb_block, cs.bp_ia, cs.bp_ib,
            cs.eb_need, cs.eb_geom, cs.eb_drift, cs.bp_wake, cs.ec_a, cs.ec_b, cs.ec_key, cs.ec_d0, cs.ec_gap,

@@ -42,7 +42,7 @@ def main(argv=None):
             ax.scatter(x[nodes, 0], x[nodes, 2], s=4 + 400 * depth, c="crimson", alpha=0.7)
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
-        ax.set_title(f"{label}: {len(nodes)} nodes inside another fragment\n"
+        ax.set_title(f"{label}: {len(nodes)} node{'' if len(nodes) == 1 else 's'} inside another fragment\n"
                      f"deepest {1e3 * (depth.max() if len(depth) else 0):.1f} mm "
                      f"(t = {1e3 * t:.2f} ms)")
         rows.append((label, len(nodes), depth.max() if len(depth) else 0.0,

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "cdem/io/case.hpp"
 #include "cdem/solver/run.hpp"
@@ -39,6 +40,28 @@ TEST(RestartSignature, OldCheckpointReadsAsReleaseAngle180) {
   EXPECT_NE(upgrade_signature(old_sig), resolved_case_toml(c));
   // a signature that has the line is left as it is
   EXPECT_EQ(upgrade_signature(resolved_case_toml(c)), resolved_case_toml(c));
+}
+
+// contact.candidates was written only when "cracked" before its default became "cracked" (7 Dec
+// 2026): an old signature without the line was resolved with "released", and reads as that, in
+// the place the line has today (after friction when there is one).
+TEST(RestartSignature, OldCheckpointReadsAsReleasedCandidates) {
+  for (const char* friction : {"", "contact.friction=0.4"}) {
+    std::vector<std::string> sets, released = {"contact.candidates=\"released\""};
+    if (*friction) sets.push_back(friction), released.push_back(friction);
+    const Case c = parse_case(kCase, "c.toml", sets);
+    ASSERT_TRUE(c.contact.cracked_faces) << "the default";
+    const std::string old_sig = without_line(resolved_case_toml(c), "candidates");
+    const Case cr = parse_case(kCase, "c.toml", released);
+    EXPECT_EQ(upgrade_signature(old_sig), resolved_case_toml(cr)) << friction;
+    EXPECT_NE(upgrade_signature(old_sig), resolved_case_toml(c));
+    EXPECT_EQ(upgrade_signature(resolved_case_toml(c)), resolved_case_toml(c));
+    EXPECT_EQ(upgrade_signature(resolved_case_toml(cr)), resolved_case_toml(cr));
+    // a signature from before both keys reads as the case with both old values
+    released.push_back("simulation.release_angle=180");
+    EXPECT_EQ(upgrade_signature(without_line(old_sig, "release_angle")),
+              resolved_case_toml(parse_case(kCase, "c.toml", released)));
+  }
 }
 
 // `resume` reads the run's case.resolved.toml, whose [delays] table was written in the order the

@@ -80,9 +80,9 @@ std::string resolved_case_toml(const Case& c) {
                    c.contact.enabled ? "true" : "false", c.contact.skin, c.contact.damping_ratio,
                    c.contact.stiffness_factor);
   if (c.contact.friction >= 0) o += fmt::format("friction = {:.17g}\n", c.contact.friction);
-  // (written only when not the default, so that checkpoints of cases resolved before the key
-  // existed still match: solver/run.cpp restart_signature)
-  if (c.contact.cracked_faces) o += "candidates = \"cracked\"\n";
+  // (always written: its default changed on 7 Dec 2026; a checkpoint's case from before, without
+  // the line, was resolved with "released": solver/run.cpp upgrade_signature)
+  o += fmt::format("candidates = \"{}\"\n", c.contact.cracked_faces ? "cracked" : "released");
   if (!c.contact.edges) o += "edges = false\n";
   if (!c.contact.sleep) o += "sleep = false\n";
   for (const auto& m : c.materials) {

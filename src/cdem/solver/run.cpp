@@ -83,7 +83,7 @@ std::string upgrade_signature(std::string sig) {
     if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
   }
   // contact.candidates was written only when "cracked" (not the default) before 7 Dec 2026; now
-  // always, after stiffness_factor and friction, and its default is "cracked"
+  // always, after stiffness_factor and friction
   if (const auto ct = sig.find("\n[contact]\n"); ct != std::string::npos) {
     const auto end = sig.find("\n[", ct + 1);  // (the table's end)
     const auto in = sig.find("\ncandidates = ", ct);
@@ -301,20 +301,12 @@ void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string&
   std::string sig;
   ckpt.io("run.case_signature", sig);
   sig = upgrade_signature(std::move(sig));
-  if (sig != signature) {
-    const std::string at = first_difference(sig, signature);
-    // (the one default a run of before 7 Dec 2026 meets: say how to continue it)
-    const bool candidates = at.rfind("'candidates = ", 0) == 0;
+  if (sig != signature)
     throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
                                  "at {}; only simulation.end_time, output_interval, output_times, "
                                  "history_interval, threads, max_steps, contact.sleep and the checkpoint keys may "
-                                 "change for a restart{}",
-                                 c.path, dir, at,
-                                 candidates ? " (contact.candidates is \"cracked\" by default since 7 Dec 2026; "
-                                              "continue a run made with \"released\" by adding --set "
-                                              "'contact.candidates=\"released\"')"
-                                            : ""));
-  }
+                                 "change for a restart",
+                                 c.path, dir, first_difference(sig, signature)));
 }
 
 }  // namespace

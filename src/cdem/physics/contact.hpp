@@ -64,8 +64,8 @@ struct ContactSettings {
   double stiffness_factor = 1; // x the budget stiffness (<= 1)
   // candidates = "cracked": the faces of interfaces with a broken point are candidates too, not
   // only released ones (with released ones only, a fragment bounded by cracks that still hold
-  // can sink into a third one; about 3 times the contact cost; not the default: a penalty
-  // contact went unstable in the coarse SPEC 5.3 scheme B with it, docs/verification_contact.md)
+  // can sink into a third one; about 3 times the contact cost; not the default: penalty
+  // contacts went unstable in the coarse SPEC 5.3 study with it, docs/verification_contact.md)
   bool cracked_faces = false;
   // 3D: crossing edges of candidate faces push apart too (contact_edges.cpp)
   bool edges = true;

@@ -83,17 +83,13 @@ std::string upgrade_signature(std::string sig) {
     if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
   }
   // contact.candidates was written only when "cracked" (not the default) before 7 Dec 2026; now
-  // always, after stiffness_factor and friction
-  if (const auto ct = sig.find("\n[contact]\n"); ct != std::string::npos) {
-    const auto end = sig.find("\n[", ct + 1);  // (the table's end)
-    const auto in = sig.find("\ncandidates = ", ct);
-    if (in == std::string::npos || (end != std::string::npos && in > end)) {
-      auto at = sig.find("\nstiffness_factor = ", ct);
-      const auto fr = sig.find("\nfriction = ", ct);
-      if (fr != std::string::npos && (end == std::string::npos || fr < end)) at = fr;
-      const auto e = at == std::string::npos ? at : sig.find('\n', at + 1);
-      if (e != std::string::npos && (end == std::string::npos || e <= end)) sig.insert(e + 1, "candidates = \"released\"\n");
-    }
+  // always, after stiffness_factor and friction (both written only in [contact], friction only
+  // right after stiffness_factor)
+  if (const auto ct = sig.find("\n[contact]\n"); ct != std::string::npos && sig.find("\ncandidates = ", ct) == std::string::npos) {
+    const auto sf = sig.find("\nstiffness_factor = ", ct);
+    auto e = sf == std::string::npos ? sf : sig.find('\n', sf + 1);
+    if (e != std::string::npos && sig.compare(e + 1, 11, "friction = ") == 0) e = sig.find('\n', e + 1);
+    if (e != std::string::npos) sig.insert(e + 1, "candidates = \"released\"\n");
   }
   // [delays] was written in the hash order of the case's table before 6 Dec 2026; now by key
   const auto d = sig.find("\n[delays]\n");

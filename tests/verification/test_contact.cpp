@@ -296,11 +296,9 @@ TEST(ContactDeepTouch, PushesNothingBack3D) {
 // A held node that changes face takes no new depth with it (contact.cpp, (c): the face change).
 // At a block's edge or vertex a node is behind two or three face planes at once, within the
 // block's tolerance tol (1e-3 of its size) of each; the face it is in contact with can then change
-// while it is held. The depth it had pushed on the old face carries on to the new one, no more
-// (and of it only the part along the new normal: x cos of the angle between the two, none here,
-// the faces being at 90 degrees): before, the ignored depth d0, worn down on the old face, was
-// applied to the new face's depth, and the difference was pushed back at once: energy from
-// nothing at each change. A node on the
+// while it is held. The depth it had pushed on the old face carries on to the new one, no more:
+// before, the ignored depth d0, worn down on the old face, was applied to the new face's depth,
+// and the difference was pushed back at once: energy from nothing at each change. A node on the
 // vertex of a block of its own body (cracked faces as candidates) switched between two faces every
 // second step that way, 3-13 kJ each time, until coarse SPEC 5.3 scheme B stopped at 7.02 ms
 // (docs/verification_contact.md).

@@ -502,27 +502,14 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
             if (q == p || cs.body[cs.pair_block[q]] != cs.body[cs.pair_block[p]]) continue;
             if (cs.pair_gap[q] == 0 && cs.pair_fn[q] == 0 && dot(cs.pair_force[q], cs.pair_force[q]) == 0)
               continue;  // q held nothing
+            cs.pair_ft[p] = cs.pair_ft[q];
+            cs.pair_gap[p] = cs.pair_gap[q];
             // The depth in p's block beyond q's penetration is ignored (d0), so the penetration,
             // the force's magnitude and the stored energy carry on. (With q's d0 instead, a node
             // deeper in p's block than in q's got the difference pushed back at once: energy from
             // nothing, -1.2 MJ by 3 ms in the coarse SPEC 5.3 cylinder, docs/verification.md.)
-            // Only the part along p's normal carries on (x cos of the angle between the two
-            // normals, none when they are 90 degrees or more apart): a node inside two blocks of
-            // its body that overlap across a crack, handed from one to the other, had the one's
-            // push carried on by the other the opposite way, and bounced between them ever
-            // faster (up to 900 m/s, -3e5 J, coarse SPEC 5.3 scheme A with cracked faces, 28 ms;
-            // docs/verification_contact.md). What does not carry on is booked as dissipated.
-            const double c = std::max(0.0, dot(cs.pair_n[p], cs.pair_n[q]));
-            const double kq = cs.pair_k[q], kp = cs.pair_k[p], sr = cs.shear_ratio;
-            const Vec3 ft_q = cs.pair_ft[q];
-            const double e_q = 0.5 * kq * cs.pair_gap[q] * cs.pair_gap[q] + (sr > 0 ? 0.5 * dot(ft_q, ft_q) / (sr * kq) : 0.0);
-            cs.pair_ft[p] = c * ft_q;
-            cs.pair_gap[p] = c * cs.pair_gap[q];
-            cs.pair_g0[p] = std::max(0.0, -cs.pair_g[p] - cs.pair_gap[p]);
-            const double e_p = 0.5 * kp * cs.pair_gap[p] * cs.pair_gap[p] +
-                               (sr > 0 ? 0.5 * c * c * dot(ft_q, ft_q) / (sr * kp) : 0.0);
-            cs.pair_diss[q] += e_q - e_p;  // (q's stored energy less what p takes over)
-            cs.pair_fn[p] = c * cs.pair_fn[q];
+            cs.pair_g0[p] = std::max(0.0, -cs.pair_g[p] - cs.pair_gap[q]);
+            cs.pair_fn[p] = cs.pair_fn[q];
             cs.pair_force[p] = cs.pair_force[q];
             cs.pair_kf[p] = cs.pair_kf_now[p];  // p holds it from now on
             cs.pair_kf[q] = -1;
@@ -586,17 +573,14 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       } else if (in_contact && cs.pair_kf[p] != cs.pair_kf_now[p]) {
         // Held, it changes face (at an edge or a vertex of the block, behind two planes): d0 was
         // the ignored part of the old face's depth and means nothing for the new face's. The
-        // new face takes over the old one's pushed depth, no more, and of it only the part
-        // along the new normal (x cos of the angle between the faces' normals, none at 90
-        // degrees or more: a push the other way is no push carried on; as at the takeover by
-        // another block, (b)): the spring energy does not grow. Kept as it was, the new face's
-        // whole depth less a d0 worn down on the old face was pushed back at once. A node on a
-        // vertex of a block of its own body (the two share that one mesh vertex, no face)
-        // switched between two of the vertex's faces every second step, each switch making
-        // 3-13 kJ, until the run stopped (coarse SPEC 5.3 scheme B, cracked faces as candidates,
-        // 7.02 ms; docs/verification_contact.md).
-        const double c = std::max(0.0, dot(cs.cb_geom[cs.pair_cb[p]].n[cs.pair_kf[p]], nrm));
-        d0 = std::max(0.0, -g - c * cs.pair_gap[p]);
+        // new face takes over the old one's pushed depth, no more (its force magnitude carries
+        // on, the spring energy does not grow): kept as it was, the new face's whole depth less
+        // a d0 worn down on the old face was pushed back at once. A node on a vertex of a block
+        // of its own body (the two share that one mesh vertex, no face) switched between two of
+        // the vertex's faces every second step, each switch making 3-13 kJ, until the run
+        // stopped (coarse SPEC 5.3 scheme B, cracked faces as candidates, 7.02 ms;
+        // docs/verification_contact.md).
+        d0 = std::max(0.0, -g - cs.pair_gap[p]);
       }
       if (in_contact) d0 = std::min(d0, -g);
       // off its face (above): the whole depth is ignored, the contact kept without force, so that

@@ -570,17 +570,6 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       if (in_contact && cs.pair_kf[p] < 0) {
         const double reach = 2.0 * std::max(0.0, -vn_rel) * dt;
         d0 = -g > reach + cs.cb_geom[cs.pair_cb[p]].tol ? -g : std::max(0.0, -g - reach);
-      } else if (in_contact && cs.pair_kf[p] != cs.pair_kf_now[p]) {
-        // Held, it changes face (at an edge or a vertex of the block, behind two planes): d0 was
-        // the ignored part of the old face's depth and means nothing for the new face's. The
-        // new face takes over the old one's pushed depth, no more (its force magnitude carries
-        // on, the spring energy does not grow): kept as it was, the new face's whole depth less
-        // a d0 worn down on the old face was pushed back at once. A node on a vertex of a block
-        // of its own body (the two share that one mesh vertex, no face) switched between two of
-        // the vertex's faces every second step, each switch making 3-13 kJ, until the run
-        // stopped (coarse SPEC 5.3 scheme B, cracked faces as candidates, 7.02 ms;
-        // docs/verification_contact.md).
-        d0 = std::max(0.0, -g - cs.pair_gap[p]);
       }
       if (in_contact) d0 = std::min(d0, -g);
       // off its face (above): the whole depth is ignored, the contact kept without force, so that

@@ -69,6 +69,25 @@ TEST(RestartSignature, OldCheckpointReadsAsReleasedCandidates) {
   }
 }
 
+// contact.passivity did not exist before 7 Dec 2026; now it is written always, after candidates.
+// An old signature ran without it and reads as passivity = false: it differs from today's
+// default there (a restart asks for --set contact.passivity=false), and equals the case that
+// sets it.
+TEST(RestartSignature, OldCheckpointReadsAsNoPassivity) {
+  const Case c = parse_case(kCase, "c.toml");
+  ASSERT_TRUE(c.contact.passivity) << "the default";
+  const std::string resolved = resolved_case_toml(c);
+  ASSERT_NE(resolved.find("\ncandidates = \"released\"\npassivity = true\n"), std::string::npos);
+  const std::string old_sig = without_line(resolved, "passivity");
+  const std::string off = resolved_case_toml(parse_case(kCase, "c.toml", {"contact.passivity=false"}));
+  EXPECT_EQ(upgrade_signature(old_sig), off);
+  EXPECT_NE(upgrade_signature(old_sig), resolved);
+  EXPECT_EQ(upgrade_signature(resolved), resolved);
+  EXPECT_EQ(upgrade_signature(off), off);
+  // from before candidates was written too: both lines put back, in their places
+  EXPECT_EQ(upgrade_signature(without_line(old_sig, "candidates")), off);
+}
+
 // `resume` reads the run's case.resolved.toml, whose [delays] table was written in the order the
 // case's table was walked: a hash order, which need not survive writing and reading back. The
 // SPEC 5.3 example (three delay groups) then refused to resume ("the case differs ... at

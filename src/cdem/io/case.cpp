@@ -230,7 +230,7 @@ Case parse_case(std::string_view text, const std::string& path,
       can_break = can_break || im.law != InterfaceLaw::Elastic || im.precracked;
     c.contact.enabled = can_break;
     if (const auto ct = top.sub("contact")) {
-      ct->check_known({"enabled", "skin", "friction", "damping_ratio", "stiffness_factor", "candidates", "edges", "sleep"});
+      ct->check_known({"enabled", "skin", "friction", "damping_ratio", "stiffness_factor", "candidates", "edges", "sleep", "passivity"});
       c.contact.enabled = ct->boolean("enabled", can_break);
       c.contact.skin = ct->non_negative("skin", 0.0);
       c.contact.friction = ct->has("friction") ? ct->non_negative("friction", 0.0) : -1.0;
@@ -247,6 +247,7 @@ Case parse_case(std::string_view text, const std::string& path,
       c.contact.cracked_faces = ct->choice("candidates", {"released", "cracked"}, "released") == "cracked";
       c.contact.edges = ct->boolean("edges", true);
       c.contact.sleep = ct->boolean("sleep", true);
+      c.contact.passivity = ct->boolean("passivity", true);
     }
   }
 

@@ -84,6 +84,9 @@ std::string resolved_case_toml(const Case& c) {
   // checkpoint's case from before 7 Dec 2026 has the line only when "cracked": solver/run.cpp
   // upgrade_signature)
   o += fmt::format("candidates = \"{}\"\n", c.contact.cracked_faces ? "cracked" : "released");
+  // (always written: a checkpoint's case from before 7 Dec 2026 lacks it, and ran without:
+  // solver/run.cpp upgrade_signature)
+  o += fmt::format("passivity = {}\n", c.contact.passivity ? "true" : "false");
   if (!c.contact.edges) o += "edges = false\n";
   if (!c.contact.sleep) o += "sleep = false\n";
   for (const auto& m : c.materials) {

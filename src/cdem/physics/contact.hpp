@@ -72,6 +72,12 @@ struct ContactSettings {
   // far pairs and block pairs are not tested while they cannot have come near (contact.cpp,
   // contact_edges.cpp); false tests every pair every step (the same results, slower: a check)
   bool sleep = true;
+  // A penalty contact stays passive (contact.cpp, "passivity"): energy a node's contacts made
+  // (their booked dissipation below zero: an explicit step's kick by a spring the node left within
+  // the step, a push handed between blocks) is its debt, taken back by a dashpot on its next
+  // contact steps (Hannaford and Ryu 2002, time-domain passivity control). false: the penalty
+  // contact as before 7 Dec 2026 (docs/verification_contact.md compares them)
+  bool passivity = true;
 };
 
 // A candidate block's geometry this step: its bounding sphere grown for the quick reject
@@ -192,6 +198,10 @@ struct ContactSet {
   // in order by the passes after the narrow phase instead of through the pair's index
   std::vector<std::int32_t> near_node;
   std::vector<std::uint8_t> near_forced;
+  std::vector<double> near_dd;   // per near pair: the dissipation it booked this step (J)
+  // per node: the energy its node-to-face contacts made and have not yet taken back (J, >= 0;
+  // ContactSettings::passivity)
+  std::vector<double> node_debt;
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
   // far pairs sleep (contact.cpp, kSleepRate): per node its path length (since the first build
   // or the checkpoint loaded: a rebuild keeps it, and the wakes of the pairs that stay with it),

@@ -455,6 +455,7 @@ void index_pairs(const Model& m, ContactSet& cs) {
   cs.near.reserve(npair);
   cs.near_node.reserve(npair);
   cs.near_forced.reserve(npair);
+  cs.near_dd.reserve(npair);
   cs.near_group.reserve(npair + 1);
   cs.near_count.assign(static_cast<std::size_t>(omp_get_max_threads()) + 1, 0);
   index_edge_pairs(m, cs);

@@ -91,6 +91,13 @@ std::string upgrade_signature(std::string sig) {
     if (e != std::string::npos && sig.compare(e + 1, 11, "friction = ") == 0) e = sig.find('\n', e + 1);
     if (e != std::string::npos) sig.insert(e + 1, "candidates = \"released\"\n");
   }
+  // contact.passivity did not exist before 7 Dec 2026 (those runs ran without it); it is written
+  // always, right after candidates
+  if (const auto ct = sig.find("\n[contact]\n"); ct != std::string::npos && sig.find("\npassivity = ", ct) == std::string::npos) {
+    const auto cd = sig.find("\ncandidates = ", ct);
+    const auto e = cd == std::string::npos ? cd : sig.find('\n', cd + 1);
+    if (e != std::string::npos) sig.insert(e + 1, "passivity = false\n");
+  }
   // [delays] was written in the hash order of the case's table before 6 Dec 2026; now by key
   const auto d = sig.find("\n[delays]\n");
   if (d != std::string::npos) {

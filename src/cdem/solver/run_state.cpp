@@ -1,5 +1,7 @@
 #include "cdem/solver/run_state.hpp"
 
+#include <algorithm>
+
 namespace cdem {
 
 void io_state(StateArchive& ar, Model& m) {
@@ -82,6 +84,13 @@ void io_state(StateArchive& ar, ContactSet& cs) {
   ar.io("contact.pair_diss", cs.pair_diss);
   ar.io("contact.pair_gap", cs.pair_gap);
   ar.io("contact.pair_g0", cs.pair_g0);
+  // the nodes' passivity debts (absent in checkpoints written before 7 Dec 2026, whose runs had
+  // no such debt: none)
+  if (!ar.loading() || ar.has("contact.node_debt")) {
+    ar.io("contact.node_debt", cs.node_debt);
+  } else {
+    std::fill(cs.node_debt.begin(), cs.node_debt.end(), 0.0);
+  }
   ar.io("contact.body", cs.body);
   ar.io("contact.on_released", cs.on_released);
   ar.io("contact.face_cand", cs.face_cand);

@@ -91,6 +91,7 @@ class Simulation {
   // tied mode: what simulation.mass_scaling_dt added (blocks 0: none; solver/time_step.hpp)
   const MassScaling& mass_scaling() const { return mass_scaling_; }
   const ContactSet& contact() const { return contact_; }
+  ContactSet& contact() { return contact_; }
 
   // Energy terms at the last sampled step (call step(true) first for the kinetic part).
   EnergyBalance energy() const;

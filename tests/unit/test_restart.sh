@@ -79,6 +79,16 @@ grep -q '"fracture_degree": 0\.[1-9]' "$TMP/3d_bar.full/summary.json" || fail "3
 # contact with the cracked faces as candidates too (contact.candidates): the same guarantees
 bitwise 3d_bar_cracked "$C3" "${q3[@]}" --set 'contact.candidates="cracked"'
 grep -q 'candidates = "cracked"' "$TMP/3d_bar_cracked.full/case.resolved.toml" || fail "candidates not resolved"
+# contact without passivity (contact.passivity = false: the plain penalty, the code before 7 Dec
+# 2026): the same guarantees; continued without the --set (the default, on), it is refused with
+# the way to continue it
+bitwise 3d_bar_plain "$C3" "${q3[@]}" --set contact.passivity=false
+grep -q '^passivity = false' "$TMP/3d_bar_plain.full/case.resolved.toml" || fail "passivity not resolved"
+"$BIN" run "$C3" --restart "$TMP/3d_bar_plain.full" -q "${q3[@]}" >"$TMP/pass.log" 2>&1
+rc=$?
+[ "$rc" = 2 ] && grep -q "differs" "$TMP/pass.log" && grep -qF -- "--set contact.passivity=false" "$TMP/pass.log" ||
+  { cat "$TMP/pass.log"; fail "a run without passivity continued with the default was not refused with the hint (rc $rc)"; }
+echo "ok: a run without passivity continues only without it, and the message says how"
 
 # ---- SIGTERM and SIGINT mid-run, then resume ----
 # interrupt SIGNAL DIR ARGS...: starts the 3D run, signals it once its history has 40 rows.

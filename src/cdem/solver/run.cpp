@@ -304,12 +304,19 @@ void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string&
   std::string sig;
   ckpt.io("run.case_signature", sig);
   sig = upgrade_signature(std::move(sig));
-  if (sig != signature)
+  if (sig != signature) {
+    const std::string at = first_difference(sig, signature);
+    // (a key a run of before 7 Dec 2026 meets: say how to continue it)
+    const bool passivity = at.rfind("'passivity = ", 0) == 0;
     throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
                                  "at {}; only simulation.end_time, output_interval, output_times, "
                                  "history_interval, threads, max_steps, contact.sleep and the checkpoint keys may "
-                                 "change for a restart",
-                                 c.path, dir, first_difference(sig, signature)));
+                                 "change for a restart{}",
+                                 c.path, dir, at,
+                                 passivity ? " (contact.passivity is on by default since 7 Dec 2026; continue a run "
+                                             "made without it by adding --set contact.passivity=false)"
+                                           : ""));
+  }
 }
 
 }  // namespace

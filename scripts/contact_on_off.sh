@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # General contact on and off on a shipped 3D blast (docs/verification_contact.md, "With and
 # without contact"): examples/multihole_3d/bar.toml run to a late time with [contact] off, on with
-# candidates = "released" (the default) and on with "cracked", then the nodes that lie inside a
-# block of another fragment counted and drawn (runs/contact_on_off/contact_on_off.png).
+# candidates = "released" and on with "cracked" (the default since 7 Dec 2026), then the nodes that
+# lie inside a block of another fragment counted and drawn (runs/contact_on_off/contact_on_off.png).
 #   bash scripts/contact_on_off.sh [build/bin/cdemblast] [end time, s]     (needs python3-scipy)
 set -u
 cd "$(dirname "$0")/.."
@@ -21,5 +21,5 @@ for c in off on cracked; do
     "${set_[@]}" > "$OUT/$c.log" 2>&1
   echo "contact $c: exit $?"
 done
-/usr/bin/python3 scripts/contact_on_off.py "without contact=$OUT/off" "with contact (default: released faces)=$OUT/on" \
-  "with contact, cracked faces too=$OUT/cracked" --out "$OUT/contact_on_off.png"
+/usr/bin/python3 scripts/contact_on_off.py "without contact=$OUT/off" "with contact, released faces only=$OUT/on" \
+  "with contact, cracked faces too (default)=$OUT/cracked" --out "$OUT/contact_on_off.png"

@@ -76,9 +76,17 @@ bitwise 2d_solid_springs "$S2" "${q2[@]}" --set 'simulation.interfaces="springs"
 bitwise 3d_bar "$C3" "${q3[@]}"
 grep -q '"contact_pairs_max": [1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: no contact was active"
 grep -q '"fracture_degree": 0\.[1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: not cracked"
-# contact with the cracked faces as candidates too (contact.candidates): the same guarantees
-bitwise 3d_bar_cracked "$C3" "${q3[@]}" --set 'contact.candidates="cracked"'
-grep -q 'candidates = "cracked"' "$TMP/3d_bar_cracked.full/case.resolved.toml" || fail "candidates not resolved"
+# contact with the released faces only as candidates (contact.candidates, the default before
+# 7 Dec 2026; "cracked" since): the same guarantees
+bitwise 3d_bar_released "$C3" "${q3[@]}" --set 'contact.candidates="released"'
+grep -q 'candidates = "released"' "$TMP/3d_bar_released.full/case.resolved.toml" || fail "candidates not resolved"
+grep -q 'candidates = "cracked"' "$TMP/3d_bar.full/case.resolved.toml" || fail "the default candidates not resolved"
+# continued without the --set (the new default), it is refused with the way to continue it
+"$BIN" run "$C3" --restart "$TMP/3d_bar_released.full" -q "${q3[@]}" >"$TMP/cand.log" 2>&1
+rc=$?
+[ "$rc" = 2 ] && grep -q "differs" "$TMP/cand.log" && grep -qF -- "--set 'contact.candidates=\"released\"'" "$TMP/cand.log" ||
+  { cat "$TMP/cand.log"; fail "a released-candidates run continued with the new default was not refused with the hint (rc $rc)"; }
+echo "ok: a run with released candidates continues only with them, and the message says how"
 # contact without passivity (contact.passivity = false: the plain penalty, the code before 7 Dec
 # 2026): the same guarantees; continued without the --set (the default, on), it is refused with
 # the way to continue it

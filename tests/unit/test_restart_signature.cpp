@@ -42,30 +42,25 @@ TEST(RestartSignature, OldCheckpointReadsAsReleaseAngle180) {
   EXPECT_EQ(upgrade_signature(resolved_case_toml(c)), resolved_case_toml(c));
 }
 
-// contact.candidates was written only when "cracked" (not the default) before 7 Dec 2026; now
-// always: an old signature without the line was resolved with "released", and reads as that, in
+// contact.candidates was written only when "cracked" before its default became "cracked" (7 Dec
+// 2026): an old signature without the line was resolved with "released", and reads as that, in
 // the place the line has today (after friction when there is one).
 TEST(RestartSignature, OldCheckpointReadsAsReleasedCandidates) {
   for (const char* friction : {"", "contact.friction=0.4"}) {
-    std::vector<std::string> sets;
-    if (*friction) sets.push_back(friction);
+    std::vector<std::string> sets, released = {"contact.candidates=\"released\""};
+    if (*friction) sets.push_back(friction), released.push_back(friction);
     const Case c = parse_case(kCase, "c.toml", sets);
-    ASSERT_FALSE(c.contact.cracked_faces) << "the default";
-    const std::string resolved = resolved_case_toml(c);
-    ASSERT_NE(resolved.find("\ncandidates = \"released\"\n"), std::string::npos) << "written always";
-    const std::string old_sig = without_line(resolved, "candidates");
-    EXPECT_EQ(upgrade_signature(old_sig), resolved) << friction;
-    EXPECT_EQ(upgrade_signature(resolved), resolved);
-    // a case with cracked faces has the line, then and now, and differs there
-    sets.push_back("contact.candidates=\"cracked\"");
-    const std::string cracked = resolved_case_toml(parse_case(kCase, "c.toml", sets));
-    EXPECT_EQ(upgrade_signature(cracked), cracked);
-    EXPECT_NE(upgrade_signature(old_sig), cracked);
+    ASSERT_TRUE(c.contact.cracked_faces) << "the default";
+    const std::string old_sig = without_line(resolved_case_toml(c), "candidates");
+    const Case cr = parse_case(kCase, "c.toml", released);
+    EXPECT_EQ(upgrade_signature(old_sig), resolved_case_toml(cr)) << friction;
+    EXPECT_NE(upgrade_signature(old_sig), resolved_case_toml(c));
+    EXPECT_EQ(upgrade_signature(resolved_case_toml(c)), resolved_case_toml(c));
+    EXPECT_EQ(upgrade_signature(resolved_case_toml(cr)), resolved_case_toml(cr));
     // a signature from before both keys reads as the case with both old values
-    sets.pop_back();
-    sets.push_back("simulation.release_angle=180");
+    released.push_back("simulation.release_angle=180");
     EXPECT_EQ(upgrade_signature(without_line(old_sig, "release_angle")),
-              resolved_case_toml(parse_case(kCase, "c.toml", sets)));
+              resolved_case_toml(parse_case(kCase, "c.toml", released)));
   }
 }
 
@@ -77,15 +72,17 @@ TEST(RestartSignature, OldCheckpointReadsAsNoPassivity) {
   const Case c = parse_case(kCase, "c.toml");
   ASSERT_TRUE(c.contact.passivity) << "the default";
   const std::string resolved = resolved_case_toml(c);
-  ASSERT_NE(resolved.find("\ncandidates = \"released\"\npassivity = true\n"), std::string::npos);
+  ASSERT_NE(resolved.find("\ncandidates = \"cracked\"\npassivity = true\n"), std::string::npos);
   const std::string old_sig = without_line(resolved, "passivity");
   const std::string off = resolved_case_toml(parse_case(kCase, "c.toml", {"contact.passivity=false"}));
   EXPECT_EQ(upgrade_signature(old_sig), off);
   EXPECT_NE(upgrade_signature(old_sig), resolved);
   EXPECT_EQ(upgrade_signature(resolved), resolved);
   EXPECT_EQ(upgrade_signature(off), off);
-  // from before candidates was written too: both lines put back, in their places
-  EXPECT_EQ(upgrade_signature(without_line(old_sig, "candidates")), off);
+  // from before candidates was written too: both lines put back, in their places, with the
+  // values of then
+  EXPECT_EQ(upgrade_signature(without_line(old_sig, "candidates")),
+            resolved_case_toml(parse_case(kCase, "c.toml", {"contact.passivity=false", "contact.candidates=\"released\""})));
 }
 
 // `resume` reads the run's case.resolved.toml, whose [delays] table was written in the order the

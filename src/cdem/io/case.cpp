@@ -244,7 +244,7 @@ Case parse_case(std::string_view text, const std::string& path,
                                      "stiffness would exceed the share of the stable step it is "
                                      "given)",
                                      ct->where("stiffness_factor"), c.contact.stiffness_factor));
-      c.contact.cracked_faces = ct->choice("candidates", {"released", "cracked"}, "released") == "cracked";
+      c.contact.cracked_faces = ct->choice("candidates", {"released", "cracked"}, "cracked") == "cracked";
       c.contact.edges = ct->boolean("edges", true);
       c.contact.sleep = ct->boolean("sleep", true);
       c.contact.passivity = ct->boolean("passivity", true);

@@ -80,9 +80,8 @@ std::string resolved_case_toml(const Case& c) {
                    c.contact.enabled ? "true" : "false", c.contact.skin, c.contact.damping_ratio,
                    c.contact.stiffness_factor);
   if (c.contact.friction >= 0) o += fmt::format("friction = {:.17g}\n", c.contact.friction);
-  // (always written, so that a change of its default cannot pass unseen at a restart; a
-  // checkpoint's case from before 7 Dec 2026 has the line only when "cracked": solver/run.cpp
-  // upgrade_signature)
+  // (always written: its default changed on 7 Dec 2026; a checkpoint's case from before, without
+  // the line, was resolved with "released": solver/run.cpp upgrade_signature)
   o += fmt::format("candidates = \"{}\"\n", c.contact.cracked_faces ? "cracked" : "released");
   // (always written: a checkpoint's case from before 7 Dec 2026 lacks it, and ran without:
   // solver/run.cpp upgrade_signature)

@@ -62,11 +62,11 @@ struct ContactSettings {
   double friction = -1;        // mu; < 0: tan(phi_r) of the interface material of the region pair
   double damping_ratio = 0;    // zeta
   double stiffness_factor = 1; // x the budget stiffness (<= 1)
-  // candidates = "cracked": the faces of interfaces with a broken point are candidates too, not
-  // only released ones (with released ones only, a fragment bounded by cracks that still hold
-  // can sink into a third one; about 3 times the contact cost; not the default: penalty
-  // contacts went unstable in the coarse SPEC 5.3 study with it, docs/verification_contact.md)
-  bool cracked_faces = false;
+  // candidates = "cracked" (the default since 7 Dec 2026, with passivity below): the faces of
+  // interfaces with a broken point are candidates too, not only released ones ("released": a
+  // fragment bounded by cracks that still hold can sink into a third one; about a third of the
+  // contact cost; docs/verification_contact.md)
+  bool cracked_faces = true;
   // 3D: crossing edges of candidate faces push apart too (contact_edges.cpp)
   bool edges = true;
   // far pairs and block pairs are not tested while they cannot have come near (contact.cpp,

@@ -82,9 +82,9 @@ std::string upgrade_signature(std::string sig) {
     const auto e = p == std::string::npos ? p : sig.find('\n', p + 1);
     if (e != std::string::npos) sig.insert(e + 1, "release_angle = 180\n");
   }
-  // contact.candidates was written only when "cracked" (not the default) before 7 Dec 2026; now
-  // always, after stiffness_factor and friction (both written only in [contact], friction only
-  // right after stiffness_factor)
+  // contact.candidates was written only when "cracked" (not the default then) before 7 Dec 2026;
+  // now always, after stiffness_factor and friction (both written only in [contact], friction
+  // only right after stiffness_factor), and its default is "cracked"
   if (const auto ct = sig.find("\n[contact]\n"); ct != std::string::npos && sig.find("\ncandidates = ", ct) == std::string::npos) {
     const auto sf = sig.find("\nstiffness_factor = ", ct);
     auto e = sf == std::string::npos ? sf : sig.find('\n', sf + 1);
@@ -308,6 +308,7 @@ void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string&
     const std::string at = first_difference(sig, signature);
     // (a key a run of before 7 Dec 2026 meets: say how to continue it)
     const bool passivity = at.rfind("'passivity = ", 0) == 0;
+    const bool candidates = at.rfind("'candidates = ", 0) == 0;
     throw InputError(fmt::format("{}: the case differs from the one of the checkpointed run in '{}' "
                                  "at {}; only simulation.end_time, output_interval, output_times, "
                                  "history_interval, threads, max_steps, contact.sleep and the checkpoint keys may "
@@ -315,7 +316,10 @@ void check_checkpoint_case(StateArchive& ckpt, const Case& c, const std::string&
                                  c.path, dir, at,
                                  passivity ? " (contact.passivity is on by default since 7 Dec 2026; continue a run "
                                              "made without it by adding --set contact.passivity=false)"
-                                           : ""));
+                                 : candidates ? " (contact.candidates is \"cracked\" by default since 7 Dec 2026; "
+                                                "continue a run made with \"released\" by adding --set "
+                                                "'contact.candidates=\"released\"')"
+                                              : ""));
   }
 }
 

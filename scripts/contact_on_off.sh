@@ -21,5 +21,5 @@ for c in off on cracked; do
     "${set_[@]}" > "$OUT/$c.log" 2>&1
   echo "contact $c: exit $?"
 done
-/usr/bin/python3 scripts/contact_on_off.py "without contact=$OUT/off" "with contact, released faces only=$OUT/on" \
-  "with contact, cracked faces too (default)=$OUT/cracked" --out "$OUT/contact_on_off.png"
+/usr/bin/python3 scripts/contact_on_off.py "without contact=$OUT/off" "contact, released faces only=$OUT/on" \
+  "contact, cracked faces (default)=$OUT/cracked" --out "$OUT/contact_on_off.png"

@@ -76,27 +76,25 @@ bitwise 2d_solid_springs "$S2" "${q2[@]}" --set 'simulation.interfaces="springs"
 bitwise 3d_bar "$C3" "${q3[@]}"
 grep -q '"contact_pairs_max": [1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: no contact was active"
 grep -q '"fracture_degree": 0\.[1-9]' "$TMP/3d_bar.full/summary.json" || fail "3d_bar: not cracked"
-# contact with the released faces only as candidates (contact.candidates, the default before
-# 7 Dec 2026; "cracked" since): the same guarantees
-bitwise 3d_bar_released "$C3" "${q3[@]}" --set 'contact.candidates="released"'
-grep -q 'candidates = "released"' "$TMP/3d_bar_released.full/case.resolved.toml" || fail "candidates not resolved"
+# old_default NAME SET LINE HINT: a run made with a key's value of before 7 Dec 2026 (SET, which
+# the resolved case writes as LINE) keeps the bitwise restart; continued without the --set
+# (today's default) it is refused, and the message gives the --set that continues it (HINT)
+old_default() {
+  local name=$1 set_=$2 line=$3 hint=$4
+  bitwise "$name" "$C3" "${q3[@]}" --set "$set_"
+  grep -qxF -- "$line" "$TMP/$name.full/case.resolved.toml" || fail "$name: '$line' not resolved"
+  "$BIN" run "$C3" --restart "$TMP/$name.full" -q "${q3[@]}" >"$TMP/$name.refused.log" 2>&1
+  local rc=$?
+  [ "$rc" = 2 ] && grep -q "differs" "$TMP/$name.refused.log" && grep -qF -- "$hint" "$TMP/$name.refused.log" ||
+    { cat "$TMP/$name.refused.log"; fail "$name: continued with today's default, not refused with the hint (rc $rc)"; }
+  echo "ok: a run with $set_ continues only with it, and the message says how"
+}
+# contact with the released faces only as candidates (contact.candidates, "cracked" since 7 Dec
+# 2026), and without passivity (contact.passivity, the plain penalty: the code before 7 Dec 2026)
 grep -q 'candidates = "cracked"' "$TMP/3d_bar.full/case.resolved.toml" || fail "the default candidates not resolved"
-# continued without the --set (the new default), it is refused with the way to continue it
-"$BIN" run "$C3" --restart "$TMP/3d_bar_released.full" -q "${q3[@]}" >"$TMP/cand.log" 2>&1
-rc=$?
-[ "$rc" = 2 ] && grep -q "differs" "$TMP/cand.log" && grep -qF -- "--set 'contact.candidates=\"released\"'" "$TMP/cand.log" ||
-  { cat "$TMP/cand.log"; fail "a released-candidates run continued with the new default was not refused with the hint (rc $rc)"; }
-echo "ok: a run with released candidates continues only with them, and the message says how"
-# contact without passivity (contact.passivity = false: the plain penalty, the code before 7 Dec
-# 2026): the same guarantees; continued without the --set (the default, on), it is refused with
-# the way to continue it
-bitwise 3d_bar_plain "$C3" "${q3[@]}" --set contact.passivity=false
-grep -q '^passivity = false' "$TMP/3d_bar_plain.full/case.resolved.toml" || fail "passivity not resolved"
-"$BIN" run "$C3" --restart "$TMP/3d_bar_plain.full" -q "${q3[@]}" >"$TMP/pass.log" 2>&1
-rc=$?
-[ "$rc" = 2 ] && grep -q "differs" "$TMP/pass.log" && grep -qF -- "--set contact.passivity=false" "$TMP/pass.log" ||
-  { cat "$TMP/pass.log"; fail "a run without passivity continued with the default was not refused with the hint (rc $rc)"; }
-echo "ok: a run without passivity continues only without it, and the message says how"
+old_default 3d_bar_released 'contact.candidates="released"' 'candidates = "released"' \
+  "--set 'contact.candidates=\"released\"'"
+old_default 3d_bar_plain contact.passivity=false 'passivity = false' "--set contact.passivity=false"
 
 # ---- SIGTERM and SIGINT mid-run, then resume ----
 # interrupt SIGNAL DIR ARGS...: starts the 3D run, signals it once its history has 40 rows.

@@ -3,6 +3,7 @@
 // (contact_edges.cpp) and the gathers. The set-up and accounts are in contact_set.cpp, the
 // pairs' search in contact_broad_phase.cpp.
 #include "cdem/physics/contact.hpp"
+#include "cdem/physics/contact_passivity.hpp"
 
 #include <omp.h>
 
@@ -45,28 +46,7 @@ constexpr double kSleepRate = 3.5;
 // barycentric coordinates (half the face: a node at a face's corner, or just past it, still is).
 constexpr double kOffFace = 0.5;
 
-// Passivity (ContactSettings::passivity). A penalty spring can give back only what the motion
-// stored in it, but an explicit step can make energy: a node that leaves the spring within a step
-// is kicked by its last force for the whole step (k d v dt where the spring held k d^2 / 2), and
-// a push handed from one block to another restarts from a depth the node did not push in. Both
-// show as a pair's booked dissipation (the work done on it less its stored energy's change)
-// below zero. Each node keeps the energy its contacts made and have not taken back, its debt D:
-// at each step its contacts book D = max(0, D - sum of their dissipation). While D > 0, a node in
-// contact gets a normal dashpot c = min(D / (2 v_n^2 dt), kPassivityZeta 2 sqrt(k m),
-// kPassivityStep m / dt) on top of the contact's own damping, which takes D back over the next
-// steps (the time-domain passivity observer and controller of Hannaford and Ryu, IEEE Trans.
-// Robotics and Automation 18(1), 2002, per contact node). Half the debt per step: the work of a
-// step's force is booked half at that step and half at the next (the trapezoid above), so aiming
-// at the whole debt took about 1.5 times it (1.27 in the test), half takes about 1.05 times it.
-// A contact that made nothing is not touched. kPassivityZeta = 0.5 keeps the dashpot below
-// critical and the explicit step stable for it (the central-difference bound
-// 2 (sqrt(1 + zeta^2) - zeta) / omega = 1.24 / omega against omega dt <= 1 of the penalty's
-// share of the step budget).
-constexpr double kPassivityZeta = 0.5;
-// ... and it takes at most this share of the node's normal speed relative to the face in one step
-// (c dt <= kPassivityStep m): a dashpot on the lagged velocity that takes more overshoots, and
-// near rest flips the relative velocity's sign every step.
-constexpr double kPassivityStep = 0.25;
+// (passivity: contact_passivity.hpp)
 
 void contact_forces(Model& m, ContactSet& cs, double dt) {
   if (!cs.enabled) return;
@@ -623,8 +603,7 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
         double cdamp = zeta > 0 ? 2.0 * zeta * std::sqrt(k * m.mass[n]) : 0.0;
         // (passivity, above: the node's debt taken back by a dashpot)
         if (const double debt = cs.cfg.passivity ? cs.node_debt[n] : 0.0; debt > 0 && vn_rel != 0)
-          cdamp += std::min({0.5 * debt / (vn_rel * vn_rel * dt), kPassivityZeta * 2.0 * std::sqrt(k * m.mass[n]),
-                             kPassivityStep * m.mass[n] / dt});
+          cdamp += passivity_dashpot(debt, vn_rel, dt, k, m.mass[n]);
         fn = std::max(0.0, k * gap - cdamp * vn_rel);
         // tangential spring in the current tangent plane (magnitude kept), Coulomb cap
         ft = cs.pair_ft[p];
@@ -649,11 +628,12 @@ void contact_forces(Model& m, ContactSet& cs, double dt) {
       }
       const double e_new = 0.5 * k * gap * gap + (kt > 0 ? 0.5 * dot(ft, ft) / kt : 0.0);
       // work done on the contact by the relative motion: -F . du (F acts on the node)
-      const double dd_ = -0.5 * dot(f_old + force, du) - (e_new - e_old);
+      const double work = 0.5 * dot(f_old + force, du);
+      const double dd_ = -work - (e_new - e_old);
       cs.pair_diss[p] += dd_;
       // (to the node's debt: what is more than the round-off of the energies it is made of; a
       // resting contact's last bits would otherwise keep a dashpot on)
-      cs.near_dd[ii] = std::abs(dd_) > 1e-12 * (e_old + e_new + std::abs(0.5 * dot(f_old + force, du))) ? dd_ : 0.0;
+      cs.near_dd[ii] = std::abs(dd_) > 1e-12 * (e_old + e_new + std::abs(work)) ? dd_ : 0.0;
       cs.pair_fn[p] = fn;
       cs.pair_ft[p] = ft;
       cs.pair_gap[p] = gap;

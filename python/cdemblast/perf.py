@@ -91,3 +91,56 @@ def growth_table(rows: list[dict]) -> str:
                      f"{r['ns_2t_ratio']:.2f} | {r['bytes_per_block']:.0f} | {parts} = {r['setup_s']:.2f} | "
                      f"{r['setup_us_per_block']:.1f} |".replace(",", " "))
     return "\n".join(lines)
+
+
+def roofline_points(report: dict) -> dict:
+    """The roofline position of one `cdemblast bench --json` report of a tet model: the block
+    kernel (its flops counted from the source, its bytes the bench's estimate, its time the
+    kernel split's) and the whole step (a lower bound: the block kernel's flops over all the
+    step's bytes)."""
+    nb = report["blocks"]
+    flops = report["tet_flops_per_block"]
+    step_bytes = report["step_bytes_estimate"] / nb
+    return {
+        "peak": report["peak_gflops"],
+        "triad": report["triad_gb_s"],
+        "triad_ws": report["triad_ws_gb_s"],
+        "kernel_ai": flops / report["block_kernel_bytes_per_block"],
+        "kernel_gflops": report["block_kernel_gflops"],
+        "step_ai": flops / step_bytes,
+        "step_gflops": flops / report["ns_per_block_step"],
+    }
+
+
+def plot_roofline(reports: list[tuple[str, dict]], out_png: str, title: str = "") -> str:
+    """Roofline (log-log): the measured peak and the two triad bandwidths (memory, and the
+    model-size working set), with each report's block kernel (filled) and whole step (open, a
+    lower bound) marked. Returns the PNG's path."""
+    pts = [(label, roofline_points(r)) for label, r in reports]
+    fig, ax = plt.subplots(figsize=(7.5, 5), constrained_layout=True)
+    ai = [10 ** (k / 20) for k in range(-40, 41)]  # 0.01 to 100 flop/B
+    p0 = pts[0][1]
+    ax.plot(ai, [min(p0["peak"], a * p0["triad"]) for a in ai], "k-",
+            label=f"peak {p0['peak']:.0f} GFlop/s, triad {p0['triad']:.0f} GB/s")
+    ax.plot(ai, [min(p0["peak"], a * p0["triad_ws"]) for a in ai], "k:",
+            label=f"triad over the model's size {p0['triad_ws']:.0f} GB/s")
+    markers = "osD^v<>"
+    for i, (label, p) in enumerate(pts):
+        c = f"C{i}"
+        ax.plot(p["kernel_ai"], p["kernel_gflops"], markers[i % 7], color=c, ms=8,
+                label=f"{label}: block kernel")
+        ax.plot(p["step_ai"], p["step_gflops"], markers[i % 7], color=c, ms=8, mfc="none",
+                label=f"{label}: whole step (lower bound)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("arithmetic intensity (flop per byte)")
+    ax.set_ylabel("GFlop/s")
+    ax.set_xlim(0.01, 100)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8, loc="lower right", framealpha=0.9)
+    if title:
+        ax.set_title(title, fontsize=10)
+    os.makedirs(os.path.dirname(os.path.abspath(out_png)), exist_ok=True)
+    fig.savefig(out_png, dpi=DPI)
+    plt.close(fig)
+    return out_png

@@ -45,5 +45,29 @@ class CostGrowth(unittest.TestCase):
             self.assertGreater(len(data), 20000)  # three panels of lines and bars, not a blank page
 
 
+class Roofline(unittest.TestCase):
+    # a report of the shape bench --json writes: 400 flop per block over 800 B in the block
+    # kernel at 8 GFlop/s, the step 2000 B per block at 100 ns
+    rep = {"blocks": 1000, "tet_flops_per_block": 400.0, "block_kernel_bytes_per_block": 800.0,
+           "block_kernel_gflops": 8.0, "step_bytes_estimate": 2000.0 * 1000, "ns_per_block_step": 100.0,
+           "peak_gflops": 100.0, "triad_gb_s": 30.0, "triad_ws_gb_s": 80.0}
+
+    def test_points(self):
+        p = perf.roofline_points(self.rep)
+        self.assertAlmostEqual(p["kernel_ai"], 0.5)
+        self.assertAlmostEqual(p["kernel_gflops"], 8.0)
+        self.assertAlmostEqual(p["step_ai"], 0.2)
+        self.assertAlmostEqual(p["step_gflops"], 4.0)  # 400 flop in 100 ns
+
+    def test_picture_is_a_real_png(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = perf.plot_roofline([("a", self.rep), ("b", dict(self.rep, block_kernel_gflops=4.0))],
+                                      os.path.join(d, "roof.png"), "t")
+            with open(path, "rb") as f:
+                data = f.read()
+            self.assertEqual(data[:8], b"\x89PNG\r\n\x1a\n")
+            self.assertGreater(len(data), 20000)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -26,6 +26,16 @@ for k in ("ns_per_block_step", "ns_per_block_step_1_thread", "bytes_per_block"):
         sys.exit(f"{k}: {d[k]!r} is not positive")
 if not 0.99 < sum(v["share"] for v in d["kernels"].values()) < 1.01:
     sys.exit("kernel shares do not add up to 1")
+# the roofline: a measured peak; the tet kernel's flops from the mean Newton iterations (the JSON's
+# 3 and 4 significant digits: within 0.1 %), none for a model that is not all tets
+if not d["peak_gflops"] > 0:
+    sys.exit(f"peak_gflops: {d['peak_gflops']!r}")
+tets = d["tet_flops_per_block"] > 0
+want = 344 + 72 * d["polar_iterations"] if tets else 0
+if abs(d["tet_flops_per_block"] - want) > 1e-3 * want:
+    sys.exit(f"tet_flops_per_block {d['tet_flops_per_block']} against {want}")
+if tets and not (d["block_kernel_bytes_per_block"] > 0 and d["block_kernel_gflops"] > 0):
+    sys.exit("block kernel's bytes or GFlop/s missing")
 EOT
 }
 

@@ -205,9 +205,11 @@ struct ContactSet {
   std::vector<std::uint8_t> pair_off;  // this step: the node projects far outside its face
   // far pairs sleep (contact.cpp, kSleepRate): per node its path length (since the first build
   // or the checkpoint loaded: a rebuild keeps it, and the wakes of the pairs that stay with it),
-  // per candidate block the smallest and largest of its nodes' (2 j, 2 j + 1), per pair the bound
-  // at which it is tested again
-  std::vector<double> pair_wake, node_drift, cb_drift;
+  // per block the path length of its fastest node (the sum over the steps of its nodes' largest
+  // |v| dt: a bound on how far each of its nodes has moved), per candidate block that bound (2 j,
+  // and 2 j + 1, which is +inf while its tolerance reach is over the cap), per pair the bound at
+  // which it is tested again
+  std::vector<double> pair_wake, node_drift, blk_drift, cb_drift;
   std::vector<float> pair_gwake;   // per pair: the clock of its node's group (below) before which
                                    // it is not tested again (rounded down: a float halves the
                                    // step's streaming pass)
@@ -259,9 +261,9 @@ struct ContactSet {
   std::vector<std::int32_t> eb_block, bp_ia, bp_ib;
   std::vector<std::uint8_t> eb_need;  // this step: 1 its geometry is needed, 2 it has it
   std::vector<TetGeom> eb_geom;
-  // far block pairs sleep (contact_edges.cpp): per block of the pairs the smallest and largest
-  // path length of its nodes since the build (2 i, 2 i + 1; the largest +inf when its tolerance
-  // reach is over the cap), per block pair the bound at which it is tested again
+  // far block pairs sleep (contact_edges.cpp): per block of the pairs its path-length bound
+  // (blk_drift; 2 i, and 2 i + 1, which is +inf when its tolerance reach is over the cap), per
+  // block pair the bound at which it is tested again
   std::vector<double> eb_drift, bp_wake;
   // the edge contacts holding something, sorted by (a, b, key = 6 edge of a + edge of b): the
   // ignored depth, the penetration beyond it, the stiffness, the dissipation so far, the force

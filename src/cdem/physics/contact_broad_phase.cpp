@@ -366,6 +366,7 @@ void rebuild_contact_pairs(Model& m, ContactSet& cs, double dt) {
 
 void reset_contact_sleep(const Model& m, ContactSet& cs) {
   cs.node_drift.assign(m.n_nodes(), 0.0);
+  cs.blk_drift.assign(m.n_blocks(), 0.0);
   cs.grp_clock.assign((m.n_blocks() + kSleepGroup - 1) / kSleepGroup, 0.0);
   cs.grp_speed.assign(cs.grp_clock.size(), 0.0);
   std::fill(cs.pair_wake.begin(), cs.pair_wake.end(), 0.0);

@@ -237,8 +237,8 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
       q = e;
     }
   }
-  // (0) per block its drift bounds (node_drift: the path length of each node since the build; the
-  // largest +inf when its tolerance reach is over the cap): those of the node pairs' step when
+  // (0) per block its drift bounds (blk_drift: the path length of its fastest node, contact.cpp;
+  // the second +inf when its tolerance reach is over the cap): those of the node pairs' step when
   // the block is one of theirs (cb_drift, contact.cpp), else from its geometry, computed here
   // (eb_need 2: it has it). Its bounding sphere (the first test of an awake pair) is in its
   // geometry, computed only for the blocks of awake pairs.
@@ -246,7 +246,7 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
   static LoopSplit split_drift;
   split_drift.run(neb, [&](const LoopSplit::Range& part) {
     for (std::int64_t i = part.lo; i < part.hi; ++i) {
-      const std::int32_t b = cs.eb_block[i], n0 = m.block_first_node[b];
+      const std::int32_t b = cs.eb_block[i];
       const std::int32_t slot = cs.block_slot[b];
       cs.eb_need[i] = slot < 0 ? 2 : 0;
       if (slot >= 0) {
@@ -255,14 +255,10 @@ void edge_contact_forces(Model& m, ContactSet& cs, double dt, std::int64_t& acti
         continue;
       }
       tet_geom(m, cs, b, cs.eb_geom[i]);
-      double dmin = cs.node_drift[n0], dmax = dmin;
-      for (int k = 1; k < 4; ++k) {
-        dmin = std::min(dmin, cs.node_drift[n0 + k]);
-        dmax = std::max(dmax, cs.node_drift[n0 + k]);
-      }
-      cs.eb_drift[2 * i] = dmin;
+      const double d = cs.blk_drift[b];
+      cs.eb_drift[2 * i] = d;
       cs.eb_drift[2 * i + 1] = cs.eb_geom[i].rho <= kContactRhoCap * cs.eb_geom[i].tol
-                                   ? dmax
+                                   ? d
                                    : std::numeric_limits<double>::infinity();
     }
   });

@@ -187,7 +187,7 @@ std::size_t contact_bytes(const ContactSet& cs) {
            cs.pair_block, cs.pair_node_prev, cs.pair_block_prev, cs.pair_from, cs.pair_fn, cs.pair_ft, cs.pair_force, cs.pair_w, cs.pair_g,
            cs.pair_margin, cs.pair_score, cs.pair_kf, cs.pair_kf_now, cs.pair_n, cs.pair_k,
            cs.pair_diss, cs.pair_gap, cs.pair_g0, cs.cblock, cs.pair_cb, cs.block_slot, cs.cb_geom,
-           cs.near, cs.near_group, cs.near_scratch, cs.near_node, cs.near_forced, cs.near_dd, cs.node_debt, cs.pair_off, cs.pair_wake, cs.node_drift,
+           cs.near, cs.near_group, cs.near_scratch, cs.near_node, cs.near_forced, cs.near_dd, cs.node_debt, cs.pair_off, cs.pair_wake, cs.node_drift, cs.blk_drift,
            cs.pair_gwake, cs.cb_pair_start, cs.cb_pair, cs.grp_speed, cs.grp_clock, cs.grp_pair_start,
            cs.grp_nbr_start, cs.grp_nbr,
            cs.cb_drift, cs.near_count, cs.face_slot, cs.face_touched, cs.face_sum, cs.body,

@@ -313,6 +313,38 @@ double triad_bandwidth(std::size_t n, int threads, int reps) {
   return 24.0 * static_cast<double>(n) / best / 1e9;
 }
 
+double peak_gflops(int threads, int reps) {
+  constexpr int kAcc = 64;
+  double sum = 0;
+  auto run = [&](std::int64_t iters) {
+    const double t0 = omp_get_wtime();
+#pragma omp parallel num_threads(threads) reduction(+ : sum)
+    {
+      alignas(64) double acc[kAcc];
+      for (int i = 0; i < kAcc; ++i) acc[i] = 1.0 + 1e-3 * i;
+      // a x + b with |a| < 1: every chain stays bounded (fixed point b / (1 - a) = 0.1)
+      const double a = 0.999999, b = 1e-7;
+      for (std::int64_t it = 0; it < iters; ++it) {
+#pragma omp simd
+        for (int i = 0; i < kAcc; ++i) acc[i] = std::fma(acc[i], a, b);
+      }
+      for (int i = 0; i < kAcc; ++i) sum += acc[i];
+    }
+    return omp_get_wtime() - t0;
+  };
+  // the count that takes at least 20 ms (about 20 million on this machine; far fewer in a
+  // debug or sanitizer build, which the tests run), then the best of `reps` runs of it
+  std::int64_t iters = 10'000;
+  double best = run(iters);
+  while (best < 0.02 && iters < (std::int64_t{1} << 40)) best = run(iters *= 2);
+  for (int r = 1; r < reps; ++r) best = std::min(best, run(iters));
+  volatile double sink = sum;  // (the chains' results observed: the loops cannot be dropped)
+  (void)sink;
+  return 2.0 * kAcc * static_cast<double>(iters) * threads / best / 1e9;
+}
+
+double tet_kernel_flops(double polar_iterations) { return 344.0 + 72.0 * polar_iterations; }
+
 }  // namespace bench
 
 namespace {
@@ -556,9 +588,17 @@ int run_bench(const BenchOptions& opt) {
   // bandwidth of the cache level the step's working set lives in.
   const std::size_t triad_ws_n = std::max<std::size_t>(1024, mem / (3 * sizeof(double)));
   const double triad_ws = bench::triad_bandwidth(triad_ws_n, 2, 20);
+  // Roofline: the cores' peak against the intensity of the block kernel and of the step.
+  const double peak = bench::peak_gflops(2, 5);
   omp_set_num_threads(threads);
 
   const auto bytes = bench::estimate_step_bytes(snapshot, bars.elem_block.size());
+  const bool tets = std::all_of(snapshot.block_type.begin(), snapshot.block_type.end(),
+                                [](ElemType t) { return t == ElemType::Tet4; });
+  const double tet_flops = tets ? bench::tet_kernel_flops(polar_it) : 0.0;
+  const double blk_bytes = (bytes.blocks + bytes.gather) / nb;          // B per block
+  const double blk_ns = rm.k[kStepBlocks] / (nb * steps) * 1e9;        // ns per block-step
+  const double blk_gflops = blk_ns > 0 ? tet_flops / blk_ns : 0.0;      // flop / ns = GFlop/s
   const double step_s = rm.wall / steps;
   const double ns_block = rm.wall / (nb * steps) * 1e9;
   const double block_rate = nb * steps / rm.wall;
@@ -597,6 +637,8 @@ int run_bench(const BenchOptions& opt) {
             "\"triad_gb_s\": {:.4g}, \"triad_ws_gb_s\": {:.4g}, \"step_bytes_estimate\": {:.4g}, "
             "\"step_gb_s_estimate\": {:.4g}, \"bandwidth_fraction\": {:.4g}, "
             "\"bandwidth_fraction_ws\": {:.4g}, \"polar_iterations\": {:.3g}, "
+            "\"peak_gflops\": {:.4g}, \"tet_flops_per_block\": {:.4g}, "
+            "\"block_kernel_bytes_per_block\": {:.4g}, \"block_kernel_gflops\": {:.4g}, "
             "\"cpu_ns_per_block_step_1_thread\": {:.4g}, "
             "\"cpu_share_1_thread\": {:.3g}, \"cpu_share_2_threads\": {:.3g}, "
             "\"load_average\": [{:.2f}, {:.2f}], \"contact\": {}, \"released\": {}, "
@@ -610,7 +652,7 @@ int run_bench(const BenchOptions& opt) {
             static_cast<double>(mem) / nb, (static_cast<double>(mem) + solver_extra) / nb,
             (static_cast<double>(mem) + solver_extra + contact_extra) / nb, triad,
             triad_ws, bytes.total(), step_gbs, step_gbs / triad, step_gbs / triad_ws, polar_it,
-            cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
+            peak, tet_flops, blk_bytes, blk_gflops, cpu_ns_block_1, share1, share2, load0, load1, c.contact.enabled, released,
             rm.pairs, rm.active_max, rm.tested, rm.block_pairs_tested, m0.tied ? "tied" : "springs", setup_s, mesh_s, parts.topology,
             parts.charges, parts.simulation, kernels)
             .c_str());
@@ -719,6 +761,22 @@ int run_bench(const BenchOptions& opt) {
       "triad); 1 thread: {:.2f} GB/s of CPU time\n",
       step_gbs, threads, threads == 1 ? "" : "s", 100.0 * step_gbs / triad,
       100.0 * step_gbs / triad_ws, bytes.total() * steps / r1.cpu / 1e9);
+  out += fmt::format("roofline: peak multiply-add throughput, 2 threads, best of 5: {:.1f} GFlop/s; ridge "
+                     "at {:.2f} flop/B against the triad\n", peak, peak / triad);
+  if (tets) {
+    const double ai = tet_flops / blk_bytes, roof = std::min(peak, ai * triad);
+    out += fmt::format(
+        "  block kernel: {:.0f} flop per block (counted from the source, {:.2f} Newton iterations), "
+        "~{:.0f} B: {:.2f} flop/B; {:.2f} GFlop/s at {} thread{} = {:.0f} % of its roof "
+        "({:.1f} GFlop/s, {}-bound)\n",
+        tet_flops, polar_it, blk_bytes, ai, blk_gflops, threads, threads == 1 ? "" : "s",
+        100.0 * blk_gflops / roof, roof, ai * triad < peak ? "bandwidth" : "compute");
+    const double ai_step = tet_flops * nb / bytes.total();
+    out += fmt::format(
+        "  whole step: at least {:.0f} flop per block (the block kernel's alone) over {:.0f} B: >= "
+        "{:.2f} flop/B, >= {:.2f} GFlop/s = >= {:.1f} % of the peak\n",
+        tet_flops, bytes.total() / nb, ai_step, tet_flops / ns_block, 100.0 * tet_flops / ns_block / peak);
+  }
   std::fputs(out.c_str(), stdout);
   return 0;
 }

@@ -135,5 +135,18 @@ StepBytes estimate_step_bytes(const Model& m, std::size_t loaded_blocks);
 // counting 24 bytes per element (two reads, one write; write-allocate not counted, as STREAM).
 double triad_bandwidth(std::size_t n, int threads, int reps);
 
+// Peak double-precision throughput of this machine's cores: per thread 64 independent
+// multiply-add chains (8 AVX-512 registers, enough to cover the FMA latency on both pipes) run
+// from registers, no memory traffic; best of `reps`. Returns GFlop/s (an FMA counts 2).
+double peak_gflops(int threads, int reps);
+
+// Floating-point operations of the tet block kernel per block (block_forces.cpp, tet_chunk),
+// counted from its source: a multiply-add 2, a division 1, abs, max and compares 0. F = Ds Dm^-1,
+// det F and the orthogonality test: 101; the polar decomposition: 72 per Newton iteration (the
+// inverse by cofactors 44, R <- (R + R^-T) / 2 19, the change 9); U = R^T F, the strain, Hooke's
+// stress, P = R S, the nodal forces, the Cauchy stress and the strain energy: 243. The spring
+// gather of the blocks with opened interfaces, in the same kernel, is not counted.
+double tet_kernel_flops(double polar_iterations);
+
 }  // namespace bench
 }  // namespace cdem

@@ -918,6 +918,48 @@ TEST(ContactDeterminism, SleepClockFollowsThePairsBlocks) {
   }
 }
 
+// The sleep does not wear out over a long run. Body a spins at 50 rad/s about the x axis through
+// its centre, 1 cm from body b (at rest) across x: its face towards b turns in its own plane, so
+// the pairs across the gap stay apart, while a's nodes travel paths of different lengths (0 to
+// 3.5 m/s). A block's drift bound was the spread of its nodes' path lengths (max_i D_i(t) -
+// min_i D_i(t0)), which grows with the run and, once past the gap, woke the pairs every step
+// (built so, this fails: 34 % of the node-block and of the block-pair tests of the run without
+// sleep); the path length of the block's fastest node (blk_drift, contact.cpp) wakes them only as
+// often as that path could close the gap (0.5 % and 1.1 %). Over 1 500 steps (6.1 ms) with and
+// without the sleep: the same bits, and fewer than a tenth of the tests.
+TEST(ContactDeterminism, SleepDoesNotWearOut) {
+  auto run = [](bool sleep, std::array<std::int64_t, 3>& tests) {
+    ScopedThreads th(2);
+    const double size = 0.1, gap = 0.01, omega = 50;
+    const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
+    Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + gap, 0, 0}), "");
+    mesh.region_names = {"a", "b"};
+    for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
+    const auto glue = interface_of(InterfaceLaw::MohrCoulomb, 1e7, 3e7, 30);
+    Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "spin");
+    const Vec3 c{0.5 * size, 0.5 * size, 0.5 * size};
+    for (std::size_t n = 0; n < model.n_nodes(); ++n) {
+      const Vec3 r = model.x[n] - c;
+      model.v[n] = model.block_region[model.node_block(n)] == 0 ? Vec3{0, -omega * r.z, omega * r.y} : Vec3{};
+    }
+    Case cs = contact_case({mat_a, mat_b}, glue, 0.4);
+    cs.contact.sleep = sleep;
+    Simulation sim(std::move(model), cs);
+    for (int k = 0; k < 1500; ++k) sim.step(k % 50 == 0);
+    tests = {sim.contact().pair_tests, sim.contact().block_pair_tests, sim.contact().rebuilds};
+    return std::make_pair(sim.model().x, sim.time());
+  };
+  std::array<std::int64_t, 3> slept{}, awake{};
+  const auto a = run(true, slept), b = run(false, awake);
+  EXPECT_TRUE(same_bits(a.first, b.first));
+  std::printf("[contact sleep, long run] %.3g ms: node-block tests %lld of %lld, block-pair tests %lld of %lld, %lld rebuilds\n",
+              1e3 * a.second, static_cast<long long>(slept[0]), static_cast<long long>(awake[0]),
+              static_cast<long long>(slept[1]), static_cast<long long>(awake[1]), static_cast<long long>(slept[2]));
+  EXPECT_GT(awake[0], 0);
+  EXPECT_LT(10 * slept[0], awake[0]);
+  EXPECT_LT(10 * slept[1], awake[1]);
+}
+
 TEST(ContactDeterminism, ImpactOneAndTwoThreads) {
   const auto a = impact_run([](int) { return 1; }), b = impact_run([](int) { return 2; });
   expect_same_impact(a, b);

@@ -828,19 +828,26 @@ TEST(ContactStack, SettlesUnderGravity) {
 // 1 vs 2 threads with contact active (the 3D impact): positions, velocities, forces and the
 // contact state bitwise identical.
 // ---------------------------------------------------------------------------------------------
+// Two bodies of 48 tets, 0.1 m cubes ("a" at the origin, "b" beyond it across x by `gap`,
+// shifted by `dy`), each glued inside by a Mohr-Coulomb interface of tensile strength ft.
+auto two_bodies(double gap, double dy, double ft, const std::string& name) {
+  const double size = 0.1;
+  const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
+  Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + gap, dy, 0}), "");
+  mesh.region_names = {"a", "b"};
+  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
+  const auto glue = interface_of(InterfaceLaw::MohrCoulomb, ft, 3 * ft, 30);
+  return std::make_tuple(build_model(mesh, {mat_a, mat_b}, {glue}, name), mat_a, mat_b, glue);
+}
+
 // The 3D impact with the thread count of each step given by threads_at(step) (set-up at that of
 // step 0).
 auto impact_run(const std::function<int(int)>& threads_at, bool sleep = true,
                 std::array<std::int64_t, 3>* tests = nullptr, double gap = 1e-3, double skin = 0,
                 double va = 5.0, double vb = -5.0) {
   ScopedThreads th(threads_at(0));
-  const double size = 0.1;
-  const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
-  Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + gap, 0.02, 0}), "");
-  mesh.region_names = {"a", "b"};
-  for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
-  const auto glue = interface_of(InterfaceLaw::MohrCoulomb, 1e5, 3e5, 30);
-  Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "impact");
+  const auto [model_ab, mat_a, mat_b, glue] = two_bodies(gap, 0.02, 1e5, "impact");
+  Model model = model_ab;
   for (std::size_t n = 0; n < model.n_nodes(); ++n)
     model.v[n] = {model.block_region[model.node_block(n)] == 0 ? va : vb, 0.3, 0};
   Case c = contact_case({mat_a, mat_b}, glue, 0.4);
@@ -930,13 +937,9 @@ TEST(ContactDeterminism, SleepClockFollowsThePairsBlocks) {
 TEST(ContactDeterminism, SleepDoesNotWearOut) {
   auto run = [](bool sleep, std::array<std::int64_t, 3>& tests) {
     ScopedThreads th(2);
-    const double size = 0.1, gap = 0.01, omega = 50;
-    const auto mat_a = rock(1e10, 0.25, 2500, "a"), mat_b = rock(1e10, 0.25, 2500, "b");
-    Mesh mesh = merge(body(3, 2, size, {0, 0, 0}), body(3, 2, size, {size + gap, 0, 0}), "");
-    mesh.region_names = {"a", "b"};
-    for (std::size_t e = 0; e < mesh.num_elements(); ++e) mesh.elem_region[e] = e < 48 ? 0 : 1;
-    const auto glue = interface_of(InterfaceLaw::MohrCoulomb, 1e7, 3e7, 30);
-    Model model = build_model(mesh, {mat_a, mat_b}, {glue}, "spin");
+    const double size = 0.1, omega = 50;
+    const auto [model_ab, mat_a, mat_b, glue] = two_bodies(0.01, 0.0, 1e7, "spin");
+    Model model = model_ab;
     const Vec3 c{0.5 * size, 0.5 * size, 0.5 * size};
     for (std::size_t n = 0; n < model.n_nodes(); ++n) {
       const Vec3 r = model.x[n] - c;

@@ -1,5 +1,6 @@
 #include "cdem/parallel/ranks.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
@@ -105,6 +106,52 @@ void share_slices(double* data, const std::vector<std::int64_t>& first, int stri
   (void)data;
   (void)first;
   (void)stride;
+#endif
+}
+
+void all_to_all(const std::vector<std::vector<std::int32_t>>& send, std::vector<std::vector<std::int32_t>>& recv) {
+  const int n = g_ranks.size;
+  if (static_cast<int>(send.size()) != n) throw std::logic_error("all_to_all: not a list per rank");
+  recv.assign(static_cast<std::size_t>(n), {});
+#ifdef CDEM_HAVE_MPI
+  if (n > 1) {
+    std::vector<int> sc(n), rc(n), sd(n + 1, 0), rd(n + 1, 0);
+    for (int q = 0; q < n; ++q) {
+      if (send[q].size() > static_cast<std::size_t>(std::numeric_limits<int>::max() / n))
+        throw std::runtime_error("all_to_all: a list beyond MPI's counts");
+      sc[q] = static_cast<int>(send[q].size());
+    }
+    MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    for (int q = 0; q < n; ++q) sd[q + 1] = sd[q] + sc[q], rd[q + 1] = rd[q] + rc[q];
+    std::vector<std::int32_t> sbuf(static_cast<std::size_t>(sd[n])), rbuf(static_cast<std::size_t>(rd[n]));
+    for (int q = 0; q < n; ++q) std::copy(send[q].begin(), send[q].end(), sbuf.begin() + sd[q]);
+    MPI_Alltoallv(sbuf.data(), sc.data(), sd.data(), MPI_INT32_T, rbuf.data(), rc.data(), rd.data(),
+                  MPI_INT32_T, MPI_COMM_WORLD);
+    for (int q = 0; q < n; ++q) recv[q].assign(rbuf.begin() + rd[q], rbuf.begin() + rd[q + 1]);
+    return;
+  }
+#endif
+  recv[0] = send[0];
+}
+
+void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<double>>& send,
+                   std::vector<std::vector<double>>& recv) {
+  if (peers.empty()) return;
+#ifdef CDEM_HAVE_MPI
+  const std::size_t np = peers.size();
+  static std::vector<MPI_Request> req;
+  req.assign(2 * np, MPI_REQUEST_NULL);
+  constexpr int kTag = 17;
+  for (std::size_t k = 0; k < np; ++k)
+    MPI_Irecv(recv[k].data(), static_cast<int>(recv[k].size()), MPI_DOUBLE, peers[k], kTag, MPI_COMM_WORLD, &req[k]);
+  for (std::size_t k = 0; k < np; ++k)
+    MPI_Isend(send[k].data(), static_cast<int>(send[k].size()), MPI_DOUBLE, peers[k], kTag, MPI_COMM_WORLD,
+              &req[np + k]);
+  MPI_Waitall(static_cast<int>(2 * np), req.data(), MPI_STATUSES_IGNORE);
+#else
+  (void)send;
+  (void)recv;
+  throw std::logic_error("exchange_with: peers without MPI");
 #endif
 }
 

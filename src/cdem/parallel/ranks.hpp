@@ -53,6 +53,13 @@ class RankSession {
 // In place, every rank's slice of `data` to every rank: rank r computed the elements
 // [first[r], first[r + 1]) (first has size() + 1 entries), each `stride` doubles.
 void share_slices(double* data, const std::vector<std::int64_t>& first, int stride);
+// Every rank's `send[q]` to rank q, received as `recv[q]` from q (sizes: one list per rank;
+// recv is resized). Set-up only (MPI_Alltoall of the counts, MPI_Alltoallv).
+void all_to_all(const std::vector<std::vector<std::int32_t>>& send, std::vector<std::vector<std::int32_t>>& recv);
+// One exchange with the ranks `peers`: send[k] to peers[k] and recv[k] from it (recv[k] sized
+// by the caller to what peers[k] sends), all at once (MPI_Irecv, MPI_Isend, MPI_Waitall).
+void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<double>>& send,
+                   std::vector<std::vector<double>>& recv);
 // The largest of `v` over the ranks.
 std::int64_t max_over_ranks(std::int64_t v);
 // True when `h` is the same on every rank (a check that the ranks' states agree).

@@ -21,7 +21,7 @@
 
 namespace cdem {
 
-Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
+Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole) : m_(std::move(model)) {
   m_.release_distance_factor = c.release_distance_factor;
   // (180: never, not cos 180 = -1, which rounding can pass for faces facing exactly opposite)
   const double angle = release_angle_of(c);
@@ -66,6 +66,7 @@ Simulation::Simulation(Model model, const Case& c) : m_(std::move(model)) {
     }
     build_ties(m_);
     stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
+    if (whole) omega2_max_ = whole->omega2_max;
     opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_);
     const std::size_t nv = m_.n_vertices();
     vtx_ke_.assign(nv, 0.0);

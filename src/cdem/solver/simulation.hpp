@@ -69,9 +69,16 @@ struct StepTimes {
   std::array<double, kNumStepKernels> s{};  // wall seconds per kernel, summed over the steps
 };
 
+// What the set-up of a part's local model (parallel/halo.hpp) takes from the whole model: the
+// values its set-up would otherwise find over its own blocks only.
+struct WholeModelSetup {
+  double omega2_max = 0;  // tied mode: the largest omega^2 of all blocks (the opened stiffness)
+};
+
 class Simulation {
  public:
-  Simulation(Model model, const Case& c);
+  // `whole`: set up a part of a model (parallel/halo.hpp) with the whole model's values.
+  Simulation(Model model, const Case& c, const WholeModelSetup* whole = nullptr);
 
   // One explicit step. With sample = true the kinetic energy at t_n is evaluated.
   void step(bool sample = false);

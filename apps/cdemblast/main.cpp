@@ -232,6 +232,13 @@ int cli_main(int argc, char** argv) {
   run->add_flag("--fixed-threads", fixed_threads,
                 "Keep the thread count (by default a run drops to the cores it actually gets when "
                 "other work shares the machine, and climbs back: results do not depend on it)");
+  std::string ranks_mode = "auto";
+  run->add_option("--ranks-mode", ranks_mode,
+                  "Under mpirun: 'halo' (each rank steps its part and a ghost zone; cases without "
+                  "charges, contact, damping zones or stiffness damping), 'replicated' (each rank "
+                  "steps the whole model, dividing two kernels), 'auto' (halo where the case allows "
+                  "it). The results are the same bits (docs/parallel.md)")
+      ->check(CLI::IsMember({"auto", "halo", "replicated"}));
 
   std::string resume_dir;
   std::vector<std::string> resume_sets;
@@ -406,6 +413,7 @@ int cli_main(int argc, char** argv) {
     opt.restart = !restart_dir.empty();
     opt.overwrite = overwrite;
     opt.adapt_threads = !fixed_threads;
+    opt.ranks_mode = ranks_mode;
     const auto res = cdem::run_case(c, opt);
     return res.status;
   } catch (const cdem::InputError& e) {

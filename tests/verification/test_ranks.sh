@@ -48,7 +48,7 @@ a, b = (json.load(open(p)) for p in sys.argv[1:])
 skip = {"run_id", "wall_time_s", "loop_time_s", "threads_step_seconds", "block_steps_per_s",
         "spring_steps_per_s", "checkpoint_write_time_s", "checkpoint_bytes", "checkpoints_written",
         "kernel_time_s", "ranks", "ranks_imbalance", "ranks_charges_split", "restarted_at_step",
-        "threads_switches", "threads_final"}
+        "threads_switches", "threads_final", "ranks_mode"}
 bad = [k for k in a if k not in skip and a[k] != b.get(k)]
 if bad:
     sys.exit(f"keys differ: {bad[:8]}")
@@ -106,6 +106,50 @@ done
 same "$TMP/3d_c" "$TMP/3d_r"
 echo "restart: written by 2 ranks, continued on 3: identical to 1 rank uninterrupted"
 
+# The halo stage (parallel/halo.hpp): a case without charges, contact or damping zones is stepped
+# by parts, each rank its own and a ghost zone, the ghosts' motion received from their owners.
+# The 2D plate with a pressurised hole (tied, and the springs mode) and a 3D box with a
+# pressurised blind hole and a fixed base (tied: constrained clusters, reactions).
+# mode DIR: the summary's ranks_mode
+mode() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['ranks_mode'])" "$1/summary.json"; }
+P2=("$ROOT/examples/plate_with_hole_2d/case.toml" --set mesh.generate.element_size=0.1
+    --set mesh.generate.refine.0.size=0.04 --set simulation.end_time=6e-4 --set contact.enabled=false)
+H3=("$ROOT/tests/verification/cases/hole_box_3d.toml")
+for c in P2 H3; do
+  declare -n args=$c
+  for n in 1 2 3 4; do
+    run "$n" "$TMP/h_${c}_$n" "${args[@]}" 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "$c on $n ranks"; }
+    [ "$n" = 1 ] || [ "$(mode "$TMP/h_${c}_$n")" = halo ] || fail "$c on $n ranks: not the halo stage"
+  done
+  for n in 2 3 4; do same "$TMP/h_${c}_1" "$TMP/h_${c}_$n"; done
+  "$PY" -c "import json,sys; s=json.load(open(sys.argv[1])); sys.exit(0 if s['fracture_degree'] > 0.05 else 'too little cracking')" \
+    "$TMP/h_${c}_1/summary.json" || fail "$c: nothing to compare"
+  unset -n args
+done
+for n in 1 3; do
+  run "$n" "$TMP/h_P2s_$n" "${P2[@]}" --set 'simulation.interfaces="springs"' 2> "$TMP/log_h" ||
+    { cat "$TMP/log_h"; fail "2D springs mode, halo, on $n ranks"; }
+done
+same "$TMP/h_P2s_1" "$TMP/h_P2s_3"
+[ "$(mode "$TMP/h_P2s_3")" = halo ] || fail "2D springs mode on 3 ranks: not the halo stage"
+# the replicated stage asked for: the same bits
+"${MPIRUN[@]}" -np 2 "$BIN" run "${H3[@]}" -o "$TMP/h_rep" -t 1 --fixed-threads -q --ranks-mode replicated 2> "$TMP/log_h" ||
+  { cat "$TMP/log_h"; fail "3D box, --ranks-mode replicated"; }
+[ "$(mode "$TMP/h_rep")" = replicated ] || fail "--ranks-mode replicated not taken"
+same "$TMP/h_H3_1" "$TMP/h_rep"
+# a checkpoint of a halo run (the whole state, gathered) continued on 3 ranks (replicated)
+run 2 "$TMP/h_c0" "${H3[@]}" --set simulation.checkpoint_interval=1e-4 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "3D box with a checkpoint"; }
+cp -r "$TMP/h_c0" "$TMP/h_c"
+rm "$(ls -d "$TMP/h_c"/checkpoints/* | tail -1)"
+"${MPIRUN[@]}" -np 3 "$BIN" run "${H3[@]}" --set simulation.checkpoint_interval=1e-4 --restart "$TMP/h_c" \
+  -t 1 --fixed-threads -q 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "3D box continued on 3 ranks"; }
+grep -q '"restarted_at_step": [1-9]' "$TMP/h_c/summary.json" || fail "3D box: not restarted mid-run"
+for f in energy.csv monitors.csv fracture.csv grading.csv reactions.csv; do
+  cmp -s "$TMP/h_H3_1/$f" "$TMP/h_c/$f" || fail "3D box continued: $f differs from the 1-rank run's"
+done
+same "$TMP/h_c0" "$TMP/h_c"
+echo "halo stage: 2D (tied, springs) and 3D on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
+
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets
 # it, the others are already in the first exchange), a command that does not run on ranks.
@@ -119,4 +163,5 @@ expect_refused() {
 expect_refused "a missing case" "cannot open case file" run "$TMP/missing.toml" -o "$TMP/x" -q
 expect_refused "an occupied run directory" "holds the results of another run" run "${C2[@]}" -o "$TMP/2d_1" -q
 expect_refused "report on ranks" "only run, resume and check" report "$TMP/2d_1"
+expect_refused "the halo stage of a case with charges" "the halo stage does not step charges" run "${C2[@]}" -o "$TMP/h_x" -q --ranks-mode halo
 echo "errors on 2 ranks: exit 2 with the message, no hang"

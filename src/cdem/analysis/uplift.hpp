@@ -21,6 +21,8 @@ class UpliftTracker {
   // After a step: max over time of (x - X) . up per node (starts at 0: the reference state).
   void update(const Model& m);
   const std::vector<double>& per_node() const { return max_up_; }
+  // (the halo stage of a distributed run gathers the parts' maxima into the whole's)
+  std::vector<double>& per_node() { return max_up_; }
 
   // The largest value over all nodes, and over the nodes of rock blocks only (explosive blocks
   // and blocks mostly filled by a bar charge left out, as the study does), with the reference

@@ -155,6 +155,30 @@ void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<
 #endif
 }
 
+void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first) {
+  const int n = g_ranks.size;
+  first.assign(static_cast<std::size_t>(n) + 1, 0);
+#ifdef CDEM_HAVE_MPI
+  if (n > 1) {
+    if (mine.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+      throw std::runtime_error("gather_all: a share beyond 2^31 doubles");
+    static std::vector<int> count, displ;
+    count.assign(static_cast<std::size_t>(n), 0);
+    displ.assign(static_cast<std::size_t>(n), 0);
+    const int c = static_cast<int>(mine.size());
+    MPI_Allgather(&c, 1, MPI_INT, count.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    for (int r = 0; r < n; ++r) first[r + 1] = first[r] + count[r];
+    if (first[n] > std::numeric_limits<int>::max()) throw std::runtime_error("gather_all: beyond 2^31 doubles in all");
+    for (int r = 0; r < n; ++r) displ[r] = static_cast<int>(first[r]);
+    all.resize(static_cast<std::size_t>(first[n]));
+    MPI_Allgatherv(mine.data(), c, MPI_DOUBLE, all.data(), count.data(), displ.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    return;
+  }
+#endif
+  all = mine;
+  first[1] = static_cast<std::int64_t>(mine.size());
+}
+
 std::int64_t max_over_ranks(std::int64_t v) {
 #ifdef CDEM_HAVE_MPI
   if (g_ranks.size == 1) return v;

@@ -60,6 +60,9 @@ void all_to_all(const std::vector<std::vector<std::int32_t>>& send, std::vector<
 // by the caller to what peers[k] sends), all at once (MPI_Irecv, MPI_Isend, MPI_Waitall).
 void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<double>>& send,
                    std::vector<std::vector<double>>& recv);
+// Every rank's `mine`, concatenated in rank order, to every rank; `first` gets each rank's
+// offset in the result (size() + 1 entries). MPI_Allgather of the counts, MPI_Allgatherv.
+void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first);
 // The largest of `v` over the ranks.
 std::int64_t max_over_ranks(std::int64_t v);
 // True when `h` is the same on every rank (a check that the ranks' states agree).

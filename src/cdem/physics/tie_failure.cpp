@@ -67,7 +67,8 @@ std::uint8_t tie_strength_exceeded(const SpringLaw& law, double fn, double fs2, 
   return kModeNone;
 }
 
-double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
+double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag,
+                   std::vector<std::pair<std::int64_t, double>>* terms) {
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
   const int np = m.springs_per_iface;
   if (flag.size() != static_cast<std::size_t>(ni)) flag.assign(ni, 0);
@@ -193,7 +194,9 @@ double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag) {
       const std::size_t s = static_cast<std::size_t>(i) * np + q;
       const double fn = m.sp_fn[s];
       const Vec3 fs = m.sp_fs[s];
-      insertion += 0.5 * fn * fn / kn + 0.5 * dot(fs, fs) / ks;
+      const double e = 0.5 * fn * fn / kn + 0.5 * dot(fs, fs) / ks;
+      insertion += e;
+      if (terms) terms->emplace_back(static_cast<std::int64_t>(s), e);
       const Vec3 f = fn * n + fs;
       m.f[m.sp_a[s]] += f;
       m.f[m.sp_b[s]] -= f;

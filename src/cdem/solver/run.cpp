@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include "cdem/analysis/blast_quality.hpp"
@@ -30,6 +31,7 @@
 #include "cdem/mesh/mesh_estimate.hpp"
 #include "cdem/mesh/mesh_order.hpp"
 #include "cdem/mesh/topology.hpp"
+#include "cdem/parallel/halo.hpp"
 #include "cdem/parallel/partition.hpp"
 #include "cdem/parallel/ranks.hpp"
 #include "cdem/solver/run_checks.hpp"
@@ -333,6 +335,21 @@ void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string&
   io_state(ar, pc.solids);
 }
 
+std::string halo_unsupported(const Case& c) {
+  if (!c.holes.empty()) return "charges (their bars, gas and explosive blocks span the parts)";
+  if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
+  if (!c.damping_zones.empty()) return "damping zones (graded over the whole zone at set-up)";
+  for (const auto& mt : c.materials) {
+    if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
+    if (mt.stiffness_damping > 0) return "stiffness-proportional damping (its work summed over the model each step)";
+  }
+  if (c.interface_mode == InterfaceMode::Springs)
+    for (const auto& b : c.boundaries)
+      if (b.type == BoundaryType::Fixed || b.type == BoundaryType::Roller || b.type == BoundaryType::Velocity)
+        return "velocity constraints in the springs mode (their reactions' work summed over the model each step)";
+  return "";
+}
+
 RunResult run_case(const Case& c, const RunOptions& options) {
   const auto wall0 = Clock::now();
   // A distributed run (parallel/ranks.hpp): every rank steps the same state; rank 0 alone
@@ -366,9 +383,48 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   BarCharges& bars = pc.bars;
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
-  // The block kernel divided among the ranks: contiguous ranges of the Hilbert order.
+  // The halo stage (parallel/halo.hpp, docs/parallel.md): each rank steps its METIS part and a
+  // ghost zone (`part_sim`, set up from the same case with the whole model's time step), receives
+  // its ghosts' motion from their owners each step, and the whole model's state (`sim`, set up on
+  // every rank) is gathered from the parts when the loop reads it. A restart continues in the
+  // replicated stage (the checkpoint is the whole model's).
   PartitionQuality rank_q;
-  if (rk.size > 1) {
+  std::string ranks_mode = rk.size > 1 ? "replicated" : "one";
+  std::unique_ptr<Simulation> part_sim;
+  std::unique_ptr<HaloExchange> halo;
+  UpliftTracker part_uplift(Model{}, Vec3{0, 0, 1}, 0);
+  if (rk.size > 1 && opt.ranks_mode != "replicated") {
+    std::string why = halo_unsupported(c);
+    if (why.empty() && opt.restart) why = "a restart (it continues in the replicated stage)";
+    if (!why.empty() && opt.ranks_mode == "halo")
+      throw InputError(fmt::format("--ranks-mode halo: the halo stage does not step {} yet", why));
+    if (!why.empty() && !opt.quiet) spdlog::info("ranks: the replicated stage, as the halo stage does not step {} yet", why);
+    if (why.empty()) {
+      const BlockGraph g = block_graph(m);
+      const std::vector<std::int32_t> part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
+      rank_q = partition_quality(g, part, rk.size, {});
+      PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
+      halo = std::make_unique<HaloExchange>(pm, part);
+      Case part_case = c;
+      part_case.fixed_dt = sim.dt();
+      const WholeModelSetup ws{sim.omega2_max()};
+      part_sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
+      part_sim->make_part(sim, pm, part);
+      halo->exchange(part_sim->model());
+      part_uplift = UpliftTracker(part_sim->model(), up_direction(m, c.analysis.up), 0);
+      ranks_mode = "halo";
+      if (!opt.quiet)
+        spdlog::info("{} ranks ({} on this machine), the halo stage: {} parts by {}, {}-{} blocks each, "
+                     "imbalance {:.3f}, {:.2f} % of the interfaces between parts; this rank: {} own and "
+                     "{} ghost blocks, {} neighbours",
+                     rk.size, rk.local_size, rk.size, have_metis() ? "METIS" : "ranges of the block order",
+                     rank_q.blocks_min, rank_q.blocks_max, rank_q.imbalance, 100 * rank_q.edge_cut_share,
+                     pm.own_blocks, pm.ghost_blocks, halo->peers().size());
+    }
+  }
+  // The replicated stage: every rank steps the whole model; the block kernel is divided among the
+  // ranks by contiguous ranges of the Hilbert order.
+  if (rk.size > 1 && !part_sim) {
     const auto groups = charge_groups(m.n_blocks(), bars, solids);
     const BlockGraph g = block_graph(m, groups);
     const auto rank_blocks = block_ranges(g, rk.size);
@@ -477,7 +533,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     return &crack_gas;
   };
   // Wall time per step kernel (summary.json kernel_time_s; a few clock reads per step).
-  sim.set_timer(&kernel_times);
+  (part_sim ? *part_sim : sim).set_timer(&kernel_times);
   const auto loop0 = Clock::now();
   auto elapsed = [](Clock::time_point since) {
     return std::chrono::duration<double>(Clock::now() - since).count();
@@ -525,11 +581,31 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     const bool hist = t_state >= next_hist - 0.5 * dt || k + 1 == steps_limit;
     if (hist) reactions.before_step(m);
     const auto step0 = Clock::now();
-    sim.step(hist);
+    const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
+    int stop_flags = 0;  // (the halo stage: the signal and the wall-clock checkpoint, agreed by the ranks)
+    if (part_sim) {
+      part_sim->step(hist);
+      halo->exchange(part_sim->model());
+      part_uplift.update(part_sim->model());
+      // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
+      // end or stop, and the next step's samples (reactions read the velocities before it).
+      stop_flags = static_cast<int>(max_over_ranks(
+          stop_signal() | ((c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval) << 8)));
+      double nh = next_hist;
+      if (hist)
+        while (nh <= t_state + 0.5 * dt) nh += std::max(c.history_interval, dt);
+      const bool next_hist_due = part_sim->time() >= nh - 0.5 * dt || k + 2 == steps_limit;
+      if (hist || field || next_hist_due || k + 1 == steps_limit || stop_flags != 0 ||
+          (c.checkpoint_interval > 0 && part_sim->time() >= next_ckpt - 0.5 * dt))
+        sim.gather_parts(*part_sim, &part_uplift.per_node(), &uplift.per_node());
+      else
+        sim.follow_clock(*part_sim);
+    } else {
+      sim.step(hist);
+    }
     if (const std::string msg = governor.after_step(elapsed(step0)); !msg.empty() && !opt.quiet)
       spdlog::info("{}", msg);
-    uplift.update(m);
-    const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
+    if (!part_sim) uplift.update(m);
     if (hist) {
       // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
       while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
@@ -573,7 +649,8 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     }
     // A signal reaches the ranks at different steps: they stop together, at the step of the
     // first to see it.
-    if (const int sig = rk.size > 1 ? static_cast<int>(max_over_ranks(stop_signal())) : stop_signal()) {
+    if (const int sig = part_sim ? (stop_flags & 0xff)
+                                 : rk.size > 1 ? static_cast<int>(max_over_ranks(stop_signal())) : stop_signal()) {
       write_state();
       res.status = 128 + sig;
       res.diagnosis = fmt::format("interrupted by {} at t = {:.6g} s (step {}); continue it with "
@@ -586,7 +663,8 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     }
     if (k + 1 == steps_limit ||
         (c.checkpoint_interval > 0 && sim.time() >= next_ckpt - 0.5 * dt) ||
-        (c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval)) {
+        (part_sim ? (stop_flags >> 8) != 0
+                  : c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval)) {
       write_state();
       if (c.checkpoint_interval > 0)
         while (next_ckpt <= sim.time() + 0.5 * dt) next_ckpt += c.checkpoint_interval;
@@ -630,6 +708,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       {"ranks", std::to_string(rk.size)},
       {"ranks_imbalance", json_number(rk.size > 1 ? rank_q.imbalance : 1.0)},
       {"ranks_charges_split", std::to_string(rank_q.together_split)},
+      {"ranks_mode", json_string(ranks_mode)},
       {"threads_adaptive", opt.adapt_threads && threads > 1 ? "true" : "false"},
       {"threads_final", std::to_string(governor.threads())},
       {"threads_switches", std::to_string(governor.switches())},

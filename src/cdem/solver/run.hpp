@@ -20,7 +20,13 @@ struct RunOptions {
   bool restart = false;  // continue the run in out_dir from its last good checkpoint
   bool overwrite = false;  // remove the results of an earlier run in out_dir first
   bool adapt_threads = true;  // follow the cores the run gets (thread_governor.hpp)
+  // Under several ranks (docs/parallel.md): "halo" (each rank steps its part and a ghost zone),
+  // "replicated" (each the whole model), "auto" (halo where the case allows it).
+  std::string ranks_mode = "auto";
 };
+
+// Why the halo stage of a distributed run cannot step this case yet ("" when it can).
+std::string halo_unsupported(const Case& c);
 
 struct RunResult {
   int status = 0;        // 0 finished, 3 stopped unstable, 128 + signal interrupted

@@ -268,7 +268,20 @@ void Simulation::step(bool sample) {
   std::int32_t first = -1;
   auto inv = block_forces(m_, &first, /*gather_springs=*/true, own_lo_, own_hi_);
   if (!rank_blocks_.empty()) inv = share_blocks(inv);
-  if (inv > 0) {
+  if (halo_) {
+    // a part: its own blocks' count and first (global) block, summed over the parts at the end
+    // of the step (part_sums)
+    const std::int64_t any = inv;
+    inv = 0;
+    first = -1;
+    if (any > 0)
+      for (std::size_t b = 0; b < m_.n_blocks(); ++b)
+        if (halo_own_block(b) && !(m_.vol_ratio[b] > 0) && !m_.block_materials[m_.block_material[b]].charge_block &&
+            m_.block_materials[m_.block_material[b]].explosive.empty()) {
+          if (first < 0) first = halo_global_block(b);
+          ++inv;
+        }
+  } else if (inv > 0) {
     // A bar's charge blocks (mostly products: little or no rock stiffness) may collapse once the
     // gas has left them; that is not the rock inverting (the run goes on). Recounted here, in
     // the rare steps with an inversion.
@@ -281,8 +294,10 @@ void Simulation::step(bool sample) {
         ++inv;
       }
   }
-  if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
-  inverted_ = inv;
+  if (!halo_) {
+    if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
+    inverted_ = inv;
+  }
   // 3b. stiffness-proportional damping of the blocks (when a material has it)
   if (beta_max_ > 0) stiffness_damping_forces(m_, sd_force_, sd_power_);
   lap(kStepBlocks);
@@ -296,7 +311,11 @@ void Simulation::step(bool sample) {
   for (auto& h : loads_) h(m_, applied_, t_);
   lap(kStepLoads);
   // 6. tied mode: ties broken by the blocks' traction are untied (their force added to f)
-  if (m_.tied) w_insert_ += tie_failure(m_, t_, tie_flag_);
+  if (m_.tied) {
+    insert_terms_.clear();
+    const double insertion = tie_failure(m_, t_, tie_flag_, halo_ ? &insert_terms_ : nullptr);
+    if (!halo_) w_insert_ += insertion;  // (a part: over the whole model, part_sums)
+  }
   lap(kStepTies);
   // 7. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
@@ -334,6 +353,11 @@ void Simulation::step(bool sample) {
   }
   double step_absorbed = 0, load_after = 0;
   step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
+  if (halo_) {  // a part: these sums and the inverted blocks over the whole model
+    part_sums(step_boundary, step_absorbed, load_after, inv, first);
+    if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
+    inverted_ = inv;
+  }
   last_boundary_ += load_after;
   w_boundary_ += step_boundary;
   w_explosive_ += step_explosive;

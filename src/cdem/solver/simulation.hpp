@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -71,6 +72,10 @@ struct StepTimes {
 
 // What the set-up of a part's local model (parallel/halo.hpp) takes from the whole model: the
 // values its set-up would otherwise find over its own blocks only.
+struct PartModel;
+struct HaloIndex;
+struct HaloGatherLists;
+
 struct WholeModelSetup {
   double omega2_max = 0;  // tied mode: the largest omega^2 of all blocks (the opened stiffness)
 };
@@ -129,6 +134,23 @@ class Simulation {
   // ranks (block_first: one range per rank, block_ranges in parallel/partition.hpp).
   void distribute(const std::vector<std::int64_t>& block_first, int rank);
 
+  // ---- The halo stage of a distributed run (parallel/halo.hpp; simulation_halo.cpp) ----
+  // Makes this Simulation, set up from part `pm` of the model `whole` steps (with the whole's
+  // WholeModelSetup and time step), that part: the sums its step forms over the model (the
+  // boundary loads' work, the constrained vertices' reactions, the insertion energy, the
+  // inverted blocks) are then formed over the whole model's terms in the whole's order, each
+  // term from the rank that owns it (one gather of a few numbers per step). `part`: a part per
+  // block of the whole model, rank r stepping part r.
+  void make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part);
+  bool is_part() const { return halo_ != nullptr; }
+  // On the whole model's Simulation, on every rank at once: its state after the step the parts
+  // have just taken, from each part's own blocks, nodes, interfaces and vertices (one gather);
+  // `local` is this rank's part. `extra_local` / `extra_whole`: a per-node array carried along
+  // (the uplift maxima), local and whole; may be null.
+  void gather_parts(const Simulation& local, const std::vector<double>* extra_local, std::vector<double>* extra_whole);
+  // The time and step count of the part `local` (between gathers: the run loop's clock).
+  void follow_clock(const Simulation& local) { t_ = local.t_, steps_ = local.steps_; }
+
  private:
   // The block kernel's results of every rank's blocks to every rank (forces, stress, strain
   // energy, volume ratio); returns the inverted-block count's maximum over the ranks.
@@ -181,6 +203,15 @@ class Simulation {
   std::vector<double> spring_buf_;
   std::vector<std::int64_t> rank_slices_;  // scratch: the slices' offsets in spring_buf_
   int rank_ = 0;
+  // The halo stage: a part's indices (make_part), the whole's gather lists (gather_parts).
+  std::shared_ptr<const HaloIndex> halo_;
+  std::shared_ptr<const HaloGatherLists> gather_;
+  // a part's step sums over the whole model (make_part)
+  void part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
+                 std::int32_t& first);
+  bool halo_own_block(std::size_t b) const;
+  std::int32_t halo_global_block(std::size_t b) const;
+  std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)
 };
 
 }  // namespace cdem

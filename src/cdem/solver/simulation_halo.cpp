@@ -1,0 +1,394 @@
+// The halo stage of a distributed run in the Simulation (simulation.hpp, parallel/halo.hpp): a
+// part's step sums over the whole model, and the whole model's state gathered from the parts.
+//
+// A part (make_part) steps its own blocks and its ghost zone. Its kernels give its own entities
+// the whole model's bits (tests/verification/test_halo.cpp); the sums a step forms over the model
+// would not: they run over the part's entities, ghosts included. So a part lists its own terms
+// of each sum with their place in the whole model's order, the ranks gather them (one
+// MPI_Allgatherv of a few numbers per boundary node, constrained vertex and untied point), and
+// every rank adds the whole list in that order, as one process does.
+//
+// The whole model's Simulation then only holds the state for the run loop's outputs, analyses
+// and checkpoints: gather_parts fills it from the parts' own entities when the loop reads it.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "cdem/parallel/halo.hpp"
+#include "cdem/parallel/ranks.hpp"
+#include "cdem/physics/tie_failure.hpp"
+#include "cdem/solver/simulation.hpp"
+
+namespace cdem {
+
+struct HaloIndex {
+  int rank = 0, ranks = 1, np = 0;
+  std::vector<std::int32_t> part;  // per global block
+  std::vector<std::int32_t> block, node, iface, vertex;  // local -> global (PartModel)
+  std::vector<std::uint8_t> own_block, own_node, own_iface, own_vertex;  // per local entity
+  // own terms' places in the whole's order, ascending: (whole's index, local index)
+  std::vector<std::pair<std::int32_t, std::int32_t>> work;   // boundary work nodes
+  std::vector<std::pair<std::int32_t, std::int32_t>> loads;  // boundary load facets
+  std::vector<std::pair<std::int32_t, std::int32_t>> con;    // tied: constrained vertices
+  std::size_t n_work = 0, n_con = 0;                         // the whole's counts
+};
+
+// On the whole model: per rank, its own entities in ascending global order.
+struct HaloGatherLists {
+  std::vector<std::vector<std::int32_t>> blocks, nodes, ifaces, vertices, work, loads;
+};
+
+namespace {
+
+// The part owning each mesh vertex (tied mode): the part of the block of its lowest node. Every
+// part owning a block at the vertex holds all its blocks (ring 1, halo.hpp), so the owner's view
+// of the vertex's clusters is whole.
+std::vector<std::int32_t> vertex_owner(const Model& m, const std::vector<std::int32_t>& part) {
+  std::vector<std::int32_t> owner(m.n_vertices(), -1);
+  for (std::size_t b = 0; b < m.n_blocks(); ++b)
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
+      auto& o = owner[static_cast<std::size_t>(m.node_vertex[n])];
+      if (o < 0) o = part[b];  // (nodes ascending: the first seen is the lowest)
+    }
+  return owner;
+}
+
+// Exact conversions to and from double (int32, uint8, float and double all are).
+struct Put {
+  std::vector<double>& b;
+  void operator()(double v) { b.push_back(v); }
+  void operator()(const Vec3& v) { b.insert(b.end(), {v.x, v.y, v.z}); }
+  void operator()(const Sym6& s) { b.insert(b.end(), s.begin(), s.end()); }
+};
+struct Get {
+  const double* p;
+  double d() { return *p++; }
+  Vec3 v3() {
+    const Vec3 v{p[0], p[1], p[2]};
+    p += 3;
+    return v;
+  }
+  Sym6 s6() {
+    Sym6 s;
+    for (auto& x : s) x = *p++;
+    return s;
+  }
+};
+
+}  // namespace
+
+void Simulation::make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part) {
+  if (!loads_.empty() || beta_max_ > 0 || contact_.enabled || (!m_.tied && !bc_.constraints.empty()) ||
+      !rank_blocks_.empty())
+    throw std::logic_error("Simulation::make_part: the halo stage does not take charges, stiffness "
+                           "damping, contact or the springs mode's constraints yet");
+  auto h = std::make_shared<HaloIndex>();
+  h->rank = ranks().rank;
+  h->ranks = ranks().size;
+  h->np = m_.springs_per_iface;
+  h->part = part;
+  h->block = pm.block;
+  h->node = pm.node;
+  h->iface = pm.iface;
+  h->vertex = pm.vertex;
+  h->own_block = pm.own;
+  h->own_node.assign(m_.n_nodes(), 0);
+  for (std::size_t b = 0; b < m_.n_blocks(); ++b)
+    for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n) h->own_node[n] = pm.own[b];
+  h->own_iface.resize(m_.n_ifaces());
+  for (std::size_t i = 0; i < m_.n_ifaces(); ++i)
+    h->own_iface[i] = part[static_cast<std::size_t>(pm.block[static_cast<std::size_t>(m_.iface_block_a[i])])] == h->rank;
+  const Model& w = whole.m_;
+  if (m_.tied) {
+    const auto owner = vertex_owner(w, part);
+    h->own_vertex.resize(m_.n_vertices());
+    for (std::size_t v = 0; v < m_.n_vertices(); ++v)
+      h->own_vertex[v] = owner[static_cast<std::size_t>(pm.vertex[v])] == h->rank;
+    for (auto lv : con_vertices_) {
+      const auto gv = pm.vertex[static_cast<std::size_t>(lv)];
+      const auto it = std::lower_bound(whole.con_vertices_.begin(), whole.con_vertices_.end(), gv);
+      if (it == whole.con_vertices_.end() || *it != gv) throw std::logic_error("make_part: a constrained vertex the whole lacks");
+      if (h->own_vertex[static_cast<std::size_t>(lv)])
+        h->con.emplace_back(static_cast<std::int32_t>(it - whole.con_vertices_.begin()), lv);
+    }
+    h->n_con = whole.con_vertices_.size();
+  }
+  // boundary work nodes: the whole's index of each own one
+  {
+    std::vector<std::int32_t> at(w.n_nodes(), -1);
+    for (std::size_t i = 0; i < whole.bc_.work_nodes.size(); ++i) at[static_cast<std::size_t>(whole.bc_.work_nodes[i])] = static_cast<std::int32_t>(i);
+    for (std::size_t i = 0; i < bc_.work_nodes.size(); ++i) {
+      const auto ln = static_cast<std::size_t>(bc_.work_nodes[i]);
+      const auto gw = at[static_cast<std::size_t>(pm.node[ln])];
+      if (gw < 0) throw std::logic_error("make_part: a boundary node the whole lacks");
+      if (h->own_node[ln]) h->work.emplace_back(gw, static_cast<std::int32_t>(i));
+    }
+    std::sort(h->work.begin(), h->work.end());
+    h->n_work = whole.bc_.work_nodes.size();
+  }
+  // load facets: the part's are the whole's of its blocks, in the same order
+  {
+    std::size_t j = 0;
+    for (std::size_t g = 0; g < whole.bc_.loads.size(); ++g) {
+      const auto gb = whole.bc_.loads[g].facet.block;
+      const auto it = std::lower_bound(pm.block.begin(), pm.block.end(), gb);
+      if (it == pm.block.end() || *it != gb) continue;
+      const auto lb = it - pm.block.begin();
+      if (j >= bc_.loads.size() || bc_.loads[j].facet.block != lb)
+        throw std::logic_error("make_part: the part's load facets are not the whole's");
+      if (pm.own[static_cast<std::size_t>(lb)]) h->loads.emplace_back(static_cast<std::int32_t>(g), static_cast<std::int32_t>(j));
+      ++j;
+    }
+    if (j != bc_.loads.size()) throw std::logic_error("make_part: the part has load facets the whole lacks");
+  }
+  halo_ = std::move(h);
+}
+
+// The step's sums over the whole model, in its order (step(), after load_work): see the top.
+bool Simulation::halo_own_block(std::size_t b) const { return halo_->own_block[b] != 0; }
+std::int32_t Simulation::halo_global_block(std::size_t b) const { return halo_->block[b]; }
+
+void Simulation::part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
+                           std::int32_t& first) {
+  const HaloIndex& h = *halo_;
+  std::vector<double> mine{static_cast<double>(inv), static_cast<double>(first), static_cast<double>(h.work.size()),
+                           static_cast<double>(h.con.size()), 0.0};
+  for (const auto& [gw, i] : h.work) {
+    mine.push_back(gw);
+    for (int k = 0; k < 4; ++k) mine.push_back(bc_.work_terms[4 * static_cast<std::size_t>(i) + k]);
+  }
+  for (const auto& [gc, lv] : h.con)
+    mine.insert(mine.end(), {static_cast<double>(gc), vtx_reaction_[2 * static_cast<std::size_t>(lv)],
+                             vtx_reaction_[2 * static_cast<std::size_t>(lv) + 1]});
+  std::size_t nins = 0;
+  for (const auto& [s, e] : insert_terms_) {
+    const auto li = static_cast<std::size_t>(s / h.np);
+    if (!h.own_iface[li]) continue;
+    mine.push_back(static_cast<double>(static_cast<std::int64_t>(h.iface[li]) * h.np + s % h.np));
+    mine.push_back(e);
+    ++nins;
+  }
+  mine[4] = static_cast<double>(nins);
+  std::vector<double> all;
+  std::vector<std::int64_t> at;
+  gather_all(mine, all, at);
+  std::vector<double> work(4 * h.n_work, 0.0), con(2 * h.n_con, 0.0);
+  std::vector<std::pair<std::int64_t, double>> ins;
+  inv = 0;
+  first = -1;
+  for (int r = 0; r < h.ranks; ++r) {
+    const double* p = all.data() + at[r];
+    inv += static_cast<std::int64_t>(p[0]);
+    const auto f = static_cast<std::int32_t>(p[1]);
+    if (f >= 0 && (first < 0 || f < first)) first = f;
+    const auto nw = static_cast<std::size_t>(p[2]), nc = static_cast<std::size_t>(p[3]), ni = static_cast<std::size_t>(p[4]);
+    p += 5;
+    for (std::size_t k = 0; k < nw; ++k, p += 5)
+      std::copy(p + 1, p + 5, work.begin() + 4 * static_cast<std::ptrdiff_t>(p[0]));
+    for (std::size_t k = 0; k < nc; ++k, p += 3)
+      std::copy(p + 1, p + 3, con.begin() + 2 * static_cast<std::ptrdiff_t>(p[0]));
+    for (std::size_t k = 0; k < ni; ++k, p += 2) ins.emplace_back(static_cast<std::int64_t>(p[0]), p[1]);
+  }
+  // the same sums, in the same order, as one process (step(), load_work, tie_failure)
+  double cb = 0, cl = 0;
+  for (std::size_t k = 0; k < h.n_con; ++k) {
+    cb += con[2 * k];
+    cl += con[2 * k + 1];
+  }
+  double wsum = 0, d = 0, wa = 0, da = 0;
+  const double half = 0.5 * dt_;
+  for (std::size_t i = 0; i < h.n_work; ++i) {
+    wsum = std::fma(work[4 * i], dt_, wsum);
+    d = std::fma(-work[4 * i + 1], dt_, d);
+    wa = std::fma(half, work[4 * i + 2], wa);
+    da = std::fma(-half, work[4 * i + 3], da);
+  }
+  std::sort(ins.begin(), ins.end());
+  double insertion = 0;
+  for (const auto& [s, e] : ins) insertion += e;
+  w_insert_ += insertion;
+  step_boundary = cb;
+  last_boundary_ = cl;
+  step_boundary += wsum;
+  step_absorbed = d;
+  load_after = wa;
+  last_absorbed_ = da;
+}
+
+void Simulation::gather_parts(const Simulation& local, const std::vector<double>* extra_local,
+                              std::vector<double>* extra_whole) {
+  if (!local.halo_) throw std::logic_error("gather_parts: not a part");
+  const HaloIndex& h = *local.halo_;
+  const Model& l = local.m_;
+  const int np = h.np;
+  const bool fe = !m_.sp_w.empty(), g0 = !m_.sp_g0.empty();
+  if (!gather_) {
+    auto g = std::make_shared<HaloGatherLists>();
+    const auto n = static_cast<std::size_t>(h.ranks);
+    for (auto* v : {&g->blocks, &g->nodes, &g->ifaces, &g->vertices, &g->work, &g->loads}) v->assign(n, {});
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+      const auto r = static_cast<std::size_t>(h.part[b]);
+      g->blocks[r].push_back(static_cast<std::int32_t>(b));
+      for (auto nd = m_.block_first_node[b]; nd < m_.block_first_node[b + 1]; ++nd) g->nodes[r].push_back(nd);
+    }
+    for (std::size_t i = 0; i < m_.n_ifaces(); ++i)
+      g->ifaces[static_cast<std::size_t>(h.part[static_cast<std::size_t>(m_.iface_block_a[i])])].push_back(static_cast<std::int32_t>(i));
+    if (m_.tied) {
+      const auto owner = vertex_owner(m_, h.part);
+      for (std::size_t v = 0; v < owner.size(); ++v) g->vertices[static_cast<std::size_t>(owner[v])].push_back(static_cast<std::int32_t>(v));
+    }
+    for (std::size_t i = 0; i < bc_.work_nodes.size(); ++i)
+      g->work[static_cast<std::size_t>(h.part[static_cast<std::size_t>(m_.node_block(static_cast<std::size_t>(bc_.work_nodes[i])))])].push_back(static_cast<std::int32_t>(i));
+    for (std::size_t i = 0; i < bc_.loads.size(); ++i)
+      g->loads[static_cast<std::size_t>(h.part[static_cast<std::size_t>(bc_.loads[i].facet.block)])].push_back(static_cast<std::int32_t>(i));
+    gather_ = std::move(g);
+  }
+  const HaloGatherLists& g = *gather_;
+  // This part's own entities, ascending in the whole's order, field by field as unpacked below.
+  std::vector<double> buf;
+  Put put{buf};
+  for (std::size_t b = 0; b < l.n_blocks(); ++b) {
+    if (!h.own_block[b]) continue;
+    put(l.stress[b]);
+    put(l.strain_energy[b]);
+    put(l.vol_ratio[b]);
+    if (!local.ke_.empty()) put(local.ke_[b]);
+    if (!local.block_dissipated_.empty()) put(local.block_dissipated_[b]);
+    if (!local.cke_.empty()) put(local.cke_[b]);
+  }
+  for (std::size_t n = 0; n < l.n_nodes(); ++n) {
+    if (!h.own_node[n]) continue;
+    put(l.x[n]);
+    put(l.v[n]);
+    put(l.f[n]);
+    if (extra_local) put((*extra_local)[n]);
+  }
+  std::vector<std::uint8_t> fresh;  // tied: activated in this step (after the list's sorted head)
+  if (l.tied) {
+    fresh.assign(l.n_ifaces(), 0);
+    for (std::size_t k = l.active_sorted; k < l.active_ifaces.size(); ++k) fresh[static_cast<std::size_t>(l.active_ifaces[k])] = 1;
+  }
+  for (std::size_t i = 0; i < l.n_ifaces(); ++i) {
+    if (!h.own_iface[i]) continue;
+    put(l.iface_normal[i]);
+    if (l.tied) put(l.iface_active[i]), put(l.iface_check[i]), put(fresh[i]);
+    for (int q = 0; q < np; ++q) {
+      const std::size_t s = i * np + q;
+      put(l.sp_fn[s]);
+      put(l.sp_fs[s]);
+      if (fe) put(l.sp_w[s]), put(l.sp_slip[s]), put(l.sp_dil[s]);
+      if (g0) put(l.sp_g0[s]);
+      put(l.sp_state[s]);
+      put(l.sp_mode[s]);
+      put(l.sp_break_time[s]);
+      put(l.sp_dissipated[s]);
+      if (l.tied) put(l.sp_tied[s]);
+    }
+  }
+  if (l.tied)
+    for (std::size_t v = 0; v < l.n_vertices(); ++v) {
+      if (!h.own_vertex[v]) continue;
+      put(local.vtx_ke_[v]);
+      if (!local.vtx_dissipated_.empty()) put(local.vtx_dissipated_[v]);
+      if (!local.vtx_cke_.empty()) put(local.vtx_cke_[v]);
+      put(local.vtx_reaction_[2 * v]);
+      put(local.vtx_reaction_[2 * v + 1]);
+      for (auto k = l.vtx_offset[v]; k < l.vtx_offset[v + 1]; ++k) {
+        put(static_cast<double>(h.node[static_cast<std::size_t>(l.vtx_nodes[k])]));
+        put(l.vtx_run[k]);
+      }
+    }
+  for (const auto& [gw, i] : h.work) put(local.bc_.v_old[static_cast<std::size_t>(i)]);
+  for (const auto& [gl, j] : h.loads)
+    for (int q = 0; q < 3; ++q) put(local.bc_.load_force[3 * static_cast<std::size_t>(j) + q]);
+
+  std::vector<double> all;
+  std::vector<std::int64_t> at;
+  gather_all(buf, all, at);
+  Model& m = m_;
+  std::vector<std::uint8_t> fresh_w(m.tied ? m.n_ifaces() : 0, 0);
+  for (int r = 0; r < h.ranks; ++r) {
+    Get get{all.data() + at[r]};
+    const auto rr = static_cast<std::size_t>(r);
+    for (auto b : g.blocks[rr]) {
+      m.stress[b] = get.s6();
+      m.strain_energy[b] = get.d();
+      m.vol_ratio[b] = get.d();
+      if (!ke_.empty()) ke_[b] = get.d();
+      if (!block_dissipated_.empty()) block_dissipated_[b] = get.d();
+      if (!cke_.empty()) cke_[b] = get.d();
+    }
+    for (auto n : g.nodes[rr]) {
+      m.x[n] = get.v3();
+      m.v[n] = get.v3();
+      m.f[n] = get.v3();
+      if (extra_whole) (*extra_whole)[n] = get.d();
+    }
+    for (auto i : g.ifaces[rr]) {
+      m.iface_normal[i] = get.v3();
+      if (m.tied) {
+        m.iface_active[i] = static_cast<std::uint8_t>(get.d());
+        m.iface_check[i] = static_cast<std::uint8_t>(get.d());
+        fresh_w[i] = static_cast<std::uint8_t>(get.d());
+      }
+      for (int q = 0; q < np; ++q) {
+        const std::size_t s = static_cast<std::size_t>(i) * np + q;
+        m.sp_fn[s] = get.d();
+        m.sp_fs[s] = get.v3();
+        if (fe) m.sp_w[s] = get.d(), m.sp_slip[s] = get.d(), m.sp_dil[s] = get.d();
+        if (g0) m.sp_g0[s] = get.d();
+        m.sp_state[s] = static_cast<std::uint8_t>(get.d());
+        m.sp_mode[s] = static_cast<std::uint8_t>(get.d());
+        m.sp_break_time[s] = static_cast<float>(get.d());
+        m.sp_dissipated[s] = get.d();
+        if (m.tied) m.sp_tied[s] = static_cast<std::uint8_t>(get.d());
+      }
+    }
+    if (m.tied)
+      for (auto v : g.vertices[rr]) {
+        vtx_ke_[v] = get.d();
+        if (!vtx_dissipated_.empty()) vtx_dissipated_[v] = get.d();
+        if (!vtx_cke_.empty()) vtx_cke_[v] = get.d();
+        vtx_reaction_[2 * static_cast<std::size_t>(v)] = get.d();
+        vtx_reaction_[2 * static_cast<std::size_t>(v) + 1] = get.d();
+        for (auto k = m.vtx_offset[v]; k < m.vtx_offset[v + 1]; ++k) {
+          m.vtx_nodes[k] = static_cast<std::int32_t>(get.d());
+          m.vtx_run[k] = static_cast<std::uint8_t>(get.d());
+        }
+      }
+    for (auto i : g.work[rr]) bc_.v_old[static_cast<std::size_t>(i)] = get.v3();
+    for (auto i : g.loads[rr])
+      for (int q = 0; q < 3; ++q) bc_.load_force[3 * static_cast<std::size_t>(i) + q] = get.v3();
+    if (get.p != all.data() + at[r + 1]) throw std::logic_error("gather_parts: the parts' records do not match");
+  }
+  // What the parts hold alike (the step's sums were formed over the whole model: part_sums).
+  t_ = local.t_;
+  dt_ = local.dt_;
+  steps_ = local.steps_;
+  inverted_ = local.inverted_;
+  first_inverted_ = local.first_inverted_;
+  w_insert_ = local.w_insert_;
+  w_boundary_ = local.w_boundary_;
+  w_absorbed_ = local.w_absorbed_;
+  w_explosive_ = local.w_explosive_;
+  last_boundary_ = local.last_boundary_;
+  last_absorbed_ = local.last_absorbed_;
+  last_explosive_ = local.last_explosive_;
+  m.iface_normal_set = l.iface_normal_set;
+  m.released_points = 0;
+  for (auto st : m.sp_state) m.released_points += st == kReleased;
+  if (m.tied) {
+    // the active list as one process has it after the step: ascending, then the interfaces
+    // activated in the step (tie_failure, in ascending order)
+    m.active_ifaces.clear();
+    for (std::size_t i = 0; i < m.n_ifaces(); ++i)
+      if (m.iface_active[i] && !fresh_w[i]) m.active_ifaces.push_back(static_cast<std::int32_t>(i));
+    m.active_sorted = m.active_ifaces.size();
+    for (std::size_t i = 0; i < m.n_ifaces(); ++i)
+      if (fresh_w[i]) m.active_ifaces.push_back(static_cast<std::int32_t>(i));
+    std::fill(m.block_active.begin(), m.block_active.end(), 0);
+    for (auto i : m.active_ifaces) m.block_active[m.iface_block_a[i]] = m.block_active[m.iface_block_b[i]] = 1;
+  }
+}
+
+}  // namespace cdem

@@ -588,13 +588,14 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       halo->exchange(part_sim->model());
       part_uplift.update(part_sim->model());
       // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
-      // end or stop, and the next step's samples (reactions read the velocities before it).
+      // end or stop, and with reactions to measure the next step's samples (they read the
+      // velocities before it).
       stop_flags = static_cast<int>(max_over_ranks(
           stop_signal() | ((c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval) << 8)));
       double nh = next_hist;
       if (hist)
         while (nh <= t_state + 0.5 * dt) nh += std::max(c.history_interval, dt);
-      const bool next_hist_due = part_sim->time() >= nh - 0.5 * dt || k + 2 == steps_limit;
+      const bool next_hist_due = !reactions.empty() && (part_sim->time() >= nh - 0.5 * dt || k + 2 == steps_limit);
       if (hist || field || next_hist_due || k + 1 == steps_limit || stop_flags != 0 ||
           (c.checkpoint_interval > 0 && part_sim->time() >= next_ckpt - 0.5 * dt))
         sim.gather_parts(*part_sim, &part_uplift.per_node(), &uplift.per_node());

@@ -36,6 +36,8 @@ class ReactionMeter {
   // Before Simulation::step: keeps v(n-1/2) of the constrained nodes (and in tied mode of every
   // node of their vertices).
   void before_step(const Model& m);
+  // The nodes before_step reads (the halo stage of a distributed run gathers their velocities).
+  const std::vector<std::int32_t>& watched_nodes() const { return nodes_; }
   // After it: the reactions of that step, per face set (N), with t_mid = t_n + dt / 2 (the time
   // the prescribed velocities were taken at). Returns the largest difference between a
   // recomputed constrained velocity and the kernel's (m/s), a check on the recomputation.

@@ -490,6 +490,10 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   if (root) out.emplace(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "", ckpt ? &*ckpt : nullptr);
   // reactions.csv (constrained face sets)
   ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
+  // (the halo stage gathers their velocities before a sampled step: ascending, without repeats)
+  std::vector<std::int32_t> reaction_nodes = reactions.watched_nodes();
+  std::sort(reaction_nodes.begin(), reaction_nodes.end());
+  reaction_nodes.erase(std::unique(reaction_nodes.begin(), reaction_nodes.end()), reaction_nodes.end());
   const double e_floor = energy_floor(m);
   // the interfaces' booked dissipation's peak so far (after a restart: from the state's)
   double fracture_peak = -std::numeric_limits<double>::infinity();
@@ -588,19 +592,20 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       halo->exchange(part_sim->model());
       part_uplift.update(part_sim->model());
       // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
-      // end or stop, and with reactions to measure the next step's samples (they read the
-      // velocities before it).
+      // end or stop; and with reactions to measure, before a sampled step the velocities they
+      // read.
       stop_flags = static_cast<int>(max_over_ranks(
           stop_signal() | ((c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval) << 8)));
       double nh = next_hist;
       if (hist)
         while (nh <= t_state + 0.5 * dt) nh += std::max(c.history_interval, dt);
       const bool next_hist_due = !reactions.empty() && (part_sim->time() >= nh - 0.5 * dt || k + 2 == steps_limit);
-      if (hist || field || next_hist_due || k + 1 == steps_limit || stop_flags != 0 ||
+      if (hist || field || k + 1 == steps_limit || stop_flags != 0 ||
           (c.checkpoint_interval > 0 && part_sim->time() >= next_ckpt - 0.5 * dt))
         sim.gather_parts(*part_sim, &part_uplift.per_node(), &uplift.per_node());
       else
         sim.follow_clock(*part_sim);
+      if (next_hist_due) sim.gather_velocities(*part_sim, reaction_nodes);
     } else {
       sim.step(hist);
     }

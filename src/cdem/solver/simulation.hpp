@@ -148,6 +148,9 @@ class Simulation {
   // `local` is this rank's part. `extra_local` / `extra_whole`: a per-node array carried along
   // (the uplift maxima), local and whole; may be null.
   void gather_parts(const Simulation& local, const std::vector<double>* extra_local, std::vector<double>* extra_whole);
+  // The velocities of the whole model's `nodes` (ascending) from the part that owns each, on every
+  // rank at once (one small gather: what the reactions read before a sampled step).
+  void gather_velocities(const Simulation& local, const std::vector<std::int32_t>& nodes);
   // The time and step count of the part `local` (between gathers: the run loop's clock).
   void follow_clock(const Simulation& local) { t_ = local.t_, steps_ = local.steps_; }
 

@@ -153,10 +153,17 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
   const HaloIndex& h = *halo_;
   std::vector<double> mine{static_cast<double>(inv), static_cast<double>(first), static_cast<double>(h.work.size()),
                            static_cast<double>(h.con.size()), 0.0};
+  // (a node whose four terms are zero, most of a boundary at rest or only constrained, is left
+  // out: adding a zero to the sums changes no bit, as they never hold -0; fma(+-0, dt, w) = w)
+  std::size_t nwork = 0;
   for (const auto& [gw, i] : h.work) {
+    const double* t = &bc_.work_terms[4 * static_cast<std::size_t>(i)];
+    if (t[0] == 0 && t[1] == 0 && t[2] == 0 && t[3] == 0) continue;
     mine.push_back(gw);
-    for (int k = 0; k < 4; ++k) mine.push_back(bc_.work_terms[4 * static_cast<std::size_t>(i) + k]);
+    mine.insert(mine.end(), t, t + 4);
+    ++nwork;
   }
+  mine[2] = static_cast<double>(nwork);
   for (const auto& [gc, lv] : h.con)
     mine.insert(mine.end(), {static_cast<double>(gc), vtx_reaction_[2 * static_cast<std::size_t>(lv)],
                              vtx_reaction_[2 * static_cast<std::size_t>(lv) + 1]});
@@ -388,6 +395,28 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
       if (fresh_w[i]) m.active_ifaces.push_back(static_cast<std::int32_t>(i));
     std::fill(m.block_active.begin(), m.block_active.end(), 0);
     for (auto i : m.active_ifaces) m.block_active[m.iface_block_a[i]] = m.block_active[m.iface_block_b[i]] = 1;
+  }
+}
+
+void Simulation::gather_velocities(const Simulation& local, const std::vector<std::int32_t>& nodes) {
+  const HaloIndex& h = *local.halo_;
+  std::vector<double> buf;
+  Put put{buf};
+  auto owner = [&](std::int32_t n) { return h.part[static_cast<std::size_t>(m_.node_block(static_cast<std::size_t>(n)))]; };
+  for (auto n : nodes) {
+    if (owner(n) != h.rank) continue;
+    const auto it = std::lower_bound(h.node.begin(), h.node.end(), n);
+    put(local.m_.v[static_cast<std::size_t>(it - h.node.begin())]);
+  }
+  std::vector<double> all;
+  std::vector<std::int64_t> at;
+  gather_all(buf, all, at);
+  std::vector<const double*> from(static_cast<std::size_t>(h.ranks));
+  for (int r = 0; r < h.ranks; ++r) from[static_cast<std::size_t>(r)] = all.data() + at[r];
+  for (auto n : nodes) {
+    const double*& p = from[static_cast<std::size_t>(owner(n))];
+    m_.v[static_cast<std::size_t>(n)] = {p[0], p[1], p[2]};
+    p += 3;
   }
 }
 

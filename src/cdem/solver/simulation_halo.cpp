@@ -369,18 +369,13 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
     if (get.p != all.data() + at[r + 1]) throw std::logic_error("gather_parts: the parts' records do not match");
   }
   // What the parts hold alike (the step's sums were formed over the whole model: part_sums).
-  t_ = local.t_;
-  dt_ = local.dt_;
+  for (auto d : {&Simulation::t_, &Simulation::dt_, &Simulation::w_insert_, &Simulation::w_boundary_,
+                 &Simulation::w_absorbed_, &Simulation::w_explosive_, &Simulation::last_boundary_,
+                 &Simulation::last_absorbed_, &Simulation::last_explosive_})
+    this->*d = local.*d;
   steps_ = local.steps_;
   inverted_ = local.inverted_;
   first_inverted_ = local.first_inverted_;
-  w_insert_ = local.w_insert_;
-  w_boundary_ = local.w_boundary_;
-  w_absorbed_ = local.w_absorbed_;
-  w_explosive_ = local.w_explosive_;
-  last_boundary_ = local.last_boundary_;
-  last_absorbed_ = local.last_absorbed_;
-  last_explosive_ = local.last_explosive_;
   m.iface_normal_set = l.iface_normal_set;
   m.released_points = 0;
   for (auto st : m.sp_state) m.released_points += st == kReleased;

@@ -407,6 +407,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       halo = std::make_unique<HaloExchange>(pm, part);
       Case part_case = c;
       part_case.fixed_dt = sim.dt();
+      part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
       const WholeModelSetup ws{sim.omega2_max()};
       part_sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
       part_sim->make_part(sim, pm, part);

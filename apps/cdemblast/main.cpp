@@ -235,7 +235,7 @@ int cli_main(int argc, char** argv) {
   std::string ranks_mode = "auto";
   run->add_option("--ranks-mode", ranks_mode,
                   "Under mpirun: 'halo' (each rank steps its part and a ghost zone; cases without "
-                  "charges, contact, damping zones or stiffness damping), 'replicated' (each rank "
+                  "charges, contact or stiffness damping), 'replicated' (each rank "
                   "steps the whole model, dividing two kernels), 'auto' (halo where the case allows "
                   "it). The results are the same bits (docs/parallel.md)")
       ->check(CLI::IsMember({"auto", "halo", "replicated"}));

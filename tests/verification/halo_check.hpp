@@ -95,7 +95,7 @@ inline std::int64_t step_parts(const HaloCase& hc, const std::vector<std::int32_
   // reductions over the ranks).
   Case part_case = hc.c;
   part_case.fixed_dt = whole.dt();
-  const WholeModelSetup ws{whole.omega2_max()};
+  const WholeModelSetup ws{whole.omega2_max(), {}};
   std::vector<PartModel> parts;
   std::vector<std::unique_ptr<Simulation>> sims;
   std::size_t ghosts = 0;

@@ -106,16 +106,19 @@ done
 same "$TMP/3d_c" "$TMP/3d_r"
 echo "restart: written by 2 ranks, continued on 3: identical to 1 rank uninterrupted"
 
-# The halo stage (parallel/halo.hpp): a case without charges, contact or damping zones is stepped
+# The halo stage (parallel/halo.hpp): a case without charges or contact is stepped
 # by parts, each rank its own and a ghost zone, the ghosts' motion received from their owners.
 # The 2D plate with a pressurised hole (tied, and the springs mode) and a 3D box with a
-# pressurised blind hole and a fixed base (tied: constrained clusters, reactions).
+# pressurised blind hole and a fixed base (tied: constrained clusters, reactions), and a 3D
+# cylinder with a damping zone.
 # mode DIR: the summary's ranks_mode
 mode() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['ranks_mode'])" "$1/summary.json"; }
 P2=("$ROOT/examples/plate_with_hole_2d/case.toml" --set mesh.generate.element_size=0.1
     --set mesh.generate.refine.0.size=0.04 --set simulation.end_time=6e-4 --set contact.enabled=false)
 H3=("$ROOT/tests/verification/cases/hole_box_3d.toml")
-for c in P2 H3; do
+# a cylinder with an absorbing ring (a damping zone graded over the whole ring) and a pressurised hole
+R3=("$ROOT/tests/verification/cases/ring_cylinder_3d.toml")
+for c in P2 H3 R3; do
   declare -n args=$c
   for n in 1 2 3 4; do
     run "$n" "$TMP/h_${c}_$n" "${args[@]}" 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "$c on $n ranks"; }

@@ -338,7 +338,6 @@ void load_checkpointed_state(PreparedCase& pc, const Case& c, const std::string&
 std::string halo_unsupported(const Case& c) {
   if (!c.holes.empty()) return "charges (their bars, gas and explosive blocks span the parts)";
   if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
-  if (!c.damping_zones.empty()) return "damping zones (graded over the whole zone at set-up)";
   for (const auto& mt : c.materials) {
     if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
     if (mt.stiffness_damping > 0) return "stiffness-proportional damping (its work summed over the model each step)";
@@ -408,7 +407,9 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       Case part_case = c;
       part_case.fixed_dt = sim.dt();
       part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
-      const WholeModelSetup ws{sim.omega2_max()};
+      WholeModelSetup ws{sim.omega2_max(), {}};
+      if (!m.damping.empty())
+        for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
       part_sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
       part_sim->make_part(sim, pm, part);
       halo->exchange(part_sim->model());

@@ -28,7 +28,10 @@ Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole)
   m_.release_cos = angle >= 180.0 ? -std::numeric_limits<double>::infinity()
                                   : std::cos(angle * std::numbers::pi / 180.0);
   bc_ = prepare_boundaries(m_, c.boundaries, c.gravity, c.path);
-  setup_damping_zones(c);
+  if (whole && !whole->damping.empty())
+    m_.damping = whole->damping;
+  else
+    setup_damping_zones(c);
   release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
   std::vector<double>().swap(m_.inv_mass);  // no kernel reads it (integrate uses mass)
   release_unused_spring_state(m_);  // no fracture-energy law: sp_w, sp_slip, sp_dil dropped

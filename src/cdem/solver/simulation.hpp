@@ -78,6 +78,9 @@ struct HaloGatherLists;
 
 struct WholeModelSetup {
   double omega2_max = 0;  // tied mode: the largest omega^2 of all blocks (the opened stiffness)
+  // per node of the part, the whole model's mass-proportional damping (its damping zones are
+  // graded over the whole zone); empty: the part's own
+  std::vector<double> damping;
 };
 
 class Simulation {

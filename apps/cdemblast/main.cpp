@@ -33,18 +33,24 @@ namespace {
 
 // check --parts N: the METIS partition of the model into N parts and what a distributed run
 // would exchange with it (docs/parallel.md).
-void print_partition(const cdem::PreparedCase& pc, int parts) {
+void print_partition(const cdem::Case& c, const cdem::PreparedCase& pc, int parts) {
   const auto& m = pc.sim.model();
   const auto groups = cdem::charge_groups(m.n_blocks(), pc.bars, pc.solids);
   const cdem::BlockGraph g = cdem::block_graph(m, groups);
   const auto part = cdem::partition_kway(g, parts);
   const auto q = cdem::partition_quality(g, part, parts, groups);
-  // What `mpirun -np N cdemblast run` divides today (parallel/ranks.hpp): the block kernel, by
-  // contiguous ranges of the Hilbert order.
-  const auto r = cdem::partition_quality(g, cdem::ranges_to_parts(cdem::block_ranges(g, parts)), parts, groups);
-  fmt::print("ranks       mpirun -np {} divides the block kernel into Hilbert-order ranges: {} to {} "
-             "blocks, load imbalance {:.3f}, {} interfaces between ranks ({:.2f} %)\n",
-             parts, r.blocks_min, r.blocks_max, r.imbalance, r.edge_cut, 100 * r.edge_cut_share);
+  // Which stage `mpirun -np N cdemblast run` takes (docs/parallel.md): the halo stage steps the
+  // METIS parts printed below; the replicated stage divides the block kernel by contiguous ranges
+  // of the Hilbert order.
+  if (const std::string why = cdem::halo_unsupported(c); why.empty()) {
+    fmt::print("ranks       mpirun -np {}: the halo stage, each rank stepping one part below and its ghosts\n", parts);
+  } else {
+    const auto r = cdem::partition_quality(g, cdem::ranges_to_parts(cdem::block_ranges(g, parts)), parts, groups);
+    fmt::print("ranks       mpirun -np {}: the replicated stage (the halo stage does not step {} yet), dividing "
+               "the block kernel into Hilbert-order ranges: {} to {} blocks, load imbalance {:.3f}, {} "
+               "interfaces between ranks ({:.2f} %)\n",
+               parts, why, r.blocks_min, r.blocks_max, r.imbalance, r.edge_cut, 100 * r.edge_cut_share);
+  }
   if (!cdem::have_metis()) {
     fmt::print("partition   METIS: not in this build (install libmetis-dev)\n");
     return;
@@ -126,7 +132,7 @@ int cmd_check(const std::string& path, const std::vector<std::string>& sets, int
   for (const auto& ch : solids.charges)
     fmt::print("solid       hole '{}' deck {}\n", ch.hole, ch.deck + 1);
   if (!solids.empty()) fmt::print("explosive   {} blocks\n", solids.block.size());
-  if (parts > 0) print_partition(pc, parts);
+  if (parts > 0) print_partition(c, pc, parts);
   fmt::print("steps       {:.0f} to reach {} s{}\n", pc.size.steps, c.end_time,
              c.max_steps > 0 && pc.size.steps < std::ceil(c.end_time / sim.dt() - 1e-9)
                  ? " (stopped earlier by simulation.max_steps)"

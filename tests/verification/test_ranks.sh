@@ -151,6 +151,10 @@ for f in energy.csv monitors.csv fracture.csv grading.csv reactions.csv; do
   cmp -s "$TMP/h_H3_1/$f" "$TMP/h_c/$f" || fail "3D box continued: $f differs from the 1-rank run's"
 done
 same "$TMP/h_c0" "$TMP/h_c"
+# check --parts says which stage a run on that many ranks takes, and why not the halo stage
+"$BIN" check "${H3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the 3D box's stage"
+"$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step charges" ||
+  fail "check --parts: the bar case's stage"
 echo "halo stage: 2D (tied, springs) and 3D on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:

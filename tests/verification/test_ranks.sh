@@ -135,6 +135,13 @@ for n in 1 3; do
 done
 same "$TMP/h_P2s_1" "$TMP/h_P2s_3"
 [ "$(mode "$TMP/h_P2s_3")" = halo ] || fail "2D springs mode on 3 ranks: not the halo stage"
+# the springs mode with velocity constraints (the 3D box's fixed base: their reactions' work)
+for n in 1 3; do
+  run "$n" "$TMP/h_H3s_$n" "${H3[@]}" --set 'simulation.interfaces="springs"' 2> "$TMP/log_h" ||
+    { cat "$TMP/log_h"; fail "3D springs mode, halo, on $n ranks"; }
+done
+same "$TMP/h_H3s_1" "$TMP/h_H3s_3"
+[ "$(mode "$TMP/h_H3s_3")" = halo ] || fail "3D springs mode on 3 ranks: not the halo stage"
 # the replicated stage asked for: the same bits
 "${MPIRUN[@]}" -np 2 "$BIN" run "${H3[@]}" -o "$TMP/h_rep" -t 1 --fixed-threads -q --ranks-mode replicated 2> "$TMP/log_h" ||
   { cat "$TMP/log_h"; fail "3D box, --ranks-mode replicated"; }
@@ -155,7 +162,7 @@ same "$TMP/h_c0" "$TMP/h_c"
 "$BIN" check "${H3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the 3D box's stage"
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step charges" ||
   fail "check --parts: the bar case's stage"
-echo "halo stage: 2D (tied, springs) and 3D on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3) on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets

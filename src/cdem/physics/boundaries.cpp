@@ -153,15 +153,22 @@ void boundary_forces(Model& m, Boundaries& b, double t) {
   }
 }
 
-double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after) {
+double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after,
+                         std::vector<double>* terms) {
   double w = 0, wa = 0;
+  const double h = 0.5 * dt;
+  if (terms) terms->clear();
   for (const auto& c : b.constraints) {
     Vec3& v = m.v[c.node];
     const Vec3 vfree = v;
     v = apply_one(b, c, v, t);
     const Vec3 reaction = (m.mass[c.node] / dt) * (v - vfree);
-    w += dot(reaction, 0.5 * (b.v_old[c.slot] + v)) * dt;
-    wa += 0.5 * dt * dot(reaction, v);
+    // (each product with dt fused into its sum, one rounding, written out: the sums can then be
+    // formed again from the terms, by a distributed run's ranks, to the same bits)
+    const double mid = dot(reaction, 0.5 * (b.v_old[c.slot] + v)), now = dot(reaction, v);
+    w = std::fma(mid, dt, w);
+    wa = std::fma(h, now, wa);
+    if (terms) terms->insert(terms->end(), {mid, now});
   }
   if (after) *after = wa;
   return w;

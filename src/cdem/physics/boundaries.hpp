@@ -64,7 +64,10 @@ void boundary_forces(Model& m, Boundaries& b, double t);
 // Velocity constraints on v(n+1/2), prescribed values taken at t (= t_n + dt/2). Returns the
 // work of the constraint reactions over the step, R . v_mid dt with R = m (v_c - v_free) / dt;
 // *after = its part after t_n, 1/2 dt R . v(n+1/2) (Simulation::energy).
-double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after);
+// `terms`, when given, receives per constraint (in order) its two dot products, R . v_mid and
+// R . v(n+1/2), from which the sums are formed: w = fma(., dt, w), after = fma(dt / 2, ., after).
+double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after,
+                         std::vector<double>* terms = nullptr);
 
 // Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0), and
 // the parts of each after t_n, 1/2 dt F . v(n+1/2) (*after, *absorbed_after).

@@ -342,10 +342,6 @@ std::string halo_unsupported(const Case& c) {
     if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
     if (mt.stiffness_damping > 0) return "stiffness-proportional damping (its work summed over the model each step)";
   }
-  if (c.interface_mode == InterfaceMode::Springs)
-    for (const auto& b : c.boundaries)
-      if (b.type == BoundaryType::Fixed || b.type == BoundaryType::Roller || b.type == BoundaryType::Velocity)
-        return "velocity constraints in the springs mode (their reactions' work summed over the model each step)";
   return "";
 }
 

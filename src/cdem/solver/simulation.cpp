@@ -340,7 +340,7 @@ void Simulation::step(bool sample) {
     integrate(m_, bc_.gravity, dt_, block_dissipated_.data(), sample ? ke_.data() : nullptr,
               cke_.empty() ? nullptr : cke_.data());
     lap(kStepIntegrate);
-    step_boundary = apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_, &last_boundary_);
+    step_boundary = apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_, &last_boundary_, halo_ ? &con_terms_ : nullptr);
   }
   // 9. the works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt, and their parts after t_n
   // (energy() takes those back out, see last_*_)

@@ -218,6 +218,7 @@ class Simulation {
   bool halo_own_block(std::size_t b) const;
   std::int32_t halo_global_block(std::size_t b) const;
   std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)
+  std::vector<double> con_terms_;  // a part's step, springs mode: two terms per constraint
 };
 
 }  // namespace cdem

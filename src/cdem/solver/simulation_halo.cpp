@@ -29,7 +29,7 @@ struct HaloIndex {
   // own terms' places in the whole's order, ascending: (whole's index, local index)
   std::vector<std::pair<std::int32_t, std::int32_t>> work;   // boundary work nodes
   std::vector<std::pair<std::int32_t, std::int32_t>> loads;  // boundary load facets
-  std::vector<std::pair<std::int32_t, std::int32_t>> con;    // tied: constrained vertices
+  std::vector<std::pair<std::int32_t, std::int32_t>> con;    // constrained vertices (tied), constraints (springs)
   std::size_t n_work = 0, n_con = 0;                         // the whole's counts
 };
 
@@ -78,10 +78,9 @@ struct Get {
 }  // namespace
 
 void Simulation::make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part) {
-  if (!loads_.empty() || beta_max_ > 0 || contact_.enabled || (!m_.tied && !bc_.constraints.empty()) ||
-      !rank_blocks_.empty())
+  if (!loads_.empty() || beta_max_ > 0 || contact_.enabled || !rank_blocks_.empty())
     throw std::logic_error("Simulation::make_part: the halo stage does not take charges, stiffness "
-                           "damping, contact or the springs mode's constraints yet");
+                           "damping or contact yet");
   auto h = std::make_shared<HaloIndex>();
   h->rank = ranks().rank;
   h->ranks = ranks().size;
@@ -112,6 +111,21 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
         h->con.emplace_back(static_cast<std::int32_t>(it - whole.con_vertices_.begin()), lv);
     }
     h->n_con = whole.con_vertices_.size();
+  } else {
+    // the springs mode's constraints: the part's are the whole's at its nodes, in the same order
+    std::size_t j = 0;
+    for (std::size_t g = 0; g < whole.bc_.constraints.size(); ++g) {
+      const auto gn = whole.bc_.constraints[g].node;
+      const auto it = std::lower_bound(pm.node.begin(), pm.node.end(), gn);
+      if (it == pm.node.end() || *it != gn) continue;
+      const auto ln = it - pm.node.begin();
+      if (j >= bc_.constraints.size() || bc_.constraints[j].node != ln)
+        throw std::logic_error("make_part: the part's constraints are not the whole's");
+      if (h->own_node[static_cast<std::size_t>(ln)]) h->con.emplace_back(static_cast<std::int32_t>(g), static_cast<std::int32_t>(j));
+      ++j;
+    }
+    if (j != bc_.constraints.size()) throw std::logic_error("make_part: the part has constraints the whole lacks");
+    h->n_con = whole.bc_.constraints.size();
   }
   // boundary work nodes: the whole's index of each own one
   {
@@ -164,9 +178,12 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
     ++nwork;
   }
   mine[2] = static_cast<double>(nwork);
-  for (const auto& [gc, lv] : h.con)
-    mine.insert(mine.end(), {static_cast<double>(gc), vtx_reaction_[2 * static_cast<std::size_t>(lv)],
-                             vtx_reaction_[2 * static_cast<std::size_t>(lv) + 1]});
+  // (tied mode: a constrained vertex's two reaction terms; springs mode: a constraint's two dot
+  // products, apply_constraints)
+  const std::vector<double>& con_terms = m_.tied ? vtx_reaction_ : con_terms_;
+  for (const auto& [gc, l] : h.con)
+    mine.insert(mine.end(), {static_cast<double>(gc), con_terms[2 * static_cast<std::size_t>(l)],
+                             con_terms[2 * static_cast<std::size_t>(l) + 1]});
   std::size_t nins = 0;
   for (const auto& [s, e] : insert_terms_) {
     const auto li = static_cast<std::size_t>(s / h.np);
@@ -198,12 +215,17 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
   }
   // the same sums, in the same order, as one process (step(), load_work, tie_failure)
   double cb = 0, cl = 0;
+  const double half = 0.5 * dt_;
   for (std::size_t k = 0; k < h.n_con; ++k) {
-    cb += con[2 * k];
-    cl += con[2 * k + 1];
+    if (m_.tied) {
+      cb += con[2 * k];
+      cl += con[2 * k + 1];
+    } else {
+      cb = std::fma(con[2 * k], dt_, cb);
+      cl = std::fma(half, con[2 * k + 1], cl);
+    }
   }
   double wsum = 0, d = 0, wa = 0, da = 0;
-  const double half = 0.5 * dt_;
   for (std::size_t i = 0; i < h.n_work; ++i) {
     wsum = std::fma(work[4 * i], dt_, wsum);
     d = std::fma(-work[4 * i + 1], dt_, d);

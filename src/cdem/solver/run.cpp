@@ -345,6 +345,48 @@ std::string halo_unsupported(const Case& c) {
   return "";
 }
 
+namespace {
+
+// The halo stage's side of a run (parallel/halo.hpp, docs/parallel.md): this rank's part of the
+// model with its ghost zone, set up from the same case with the whole model's time step, damping
+// and frequency bound (`whole`); the exchange of its ghosts' motion; its nodes' uplift maxima.
+struct HaloRun {
+  std::unique_ptr<Simulation> sim;
+  std::unique_ptr<HaloExchange> exchange;
+  UpliftTracker uplift{Model{}, Vec3{0, 0, 1}, 0};
+  PartitionQuality quality;
+  std::size_t own_blocks = 0, ghost_blocks = 0;
+
+  HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const RankInfo& rk) {
+    const Model& m = whole.model();
+    const BlockGraph g = block_graph(m);
+    const std::vector<std::int32_t> part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
+    quality = partition_quality(g, part, rk.size, {});
+    PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
+    own_blocks = pm.own_blocks;
+    ghost_blocks = pm.ghost_blocks;
+    exchange = std::make_unique<HaloExchange>(pm, part);
+    Case part_case = c;
+    part_case.fixed_dt = whole.dt();
+    part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
+    WholeModelSetup ws{whole.omega2_max(), {}};
+    if (!m.damping.empty())
+      for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
+    sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
+    sim->make_part(whole, pm, part);
+    exchange->exchange(sim->model());  // (the set-up's cluster velocities of the ghosts)
+    uplift = UpliftTracker(sim->model(), up_direction(m, c.analysis.up), 0);
+  }
+  // One step of the part, then its ghosts' motion from their owners.
+  void step(bool sample) {
+    sim->step(sample);
+    exchange->exchange(sim->model());
+    uplift.update(sim->model());
+  }
+};
+
+}  // namespace
+
 RunResult run_case(const Case& c, const RunOptions& options) {
   const auto wall0 = Clock::now();
   // A distributed run (parallel/ranks.hpp): every rank steps the same state; rank 0 alone
@@ -379,15 +421,12 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
   // The halo stage (parallel/halo.hpp, docs/parallel.md): each rank steps its METIS part and a
-  // ghost zone (`part_sim`, set up from the same case with the whole model's time step), receives
-  // its ghosts' motion from their owners each step, and the whole model's state (`sim`, set up on
-  // every rank) is gathered from the parts when the loop reads it. A restart continues in the
-  // replicated stage (the checkpoint is the whole model's).
+  // ghost zone (`halo`), receives its ghosts' motion from their owners each step, and the whole
+  // model's state (`sim`, set up on every rank) is gathered from the parts when the loop reads
+  // it. A restart continues in the replicated stage (the checkpoint is the whole model's).
   PartitionQuality rank_q;
   std::string ranks_mode = rk.size > 1 ? "replicated" : "one";
-  std::unique_ptr<Simulation> part_sim;
-  std::unique_ptr<HaloExchange> halo;
-  UpliftTracker part_uplift(Model{}, Vec3{0, 0, 1}, 0);
+  std::optional<HaloRun> halo;
   if (rk.size > 1 && opt.ranks_mode != "replicated") {
     std::string why = halo_unsupported(c);
     if (why.empty() && opt.restart) why = "a restart (it continues in the replicated stage)";
@@ -395,21 +434,8 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       throw InputError(fmt::format("--ranks-mode halo: the halo stage does not step {} yet", why));
     if (!why.empty() && !opt.quiet) spdlog::info("ranks: the replicated stage, as the halo stage does not step {} yet", why);
     if (why.empty()) {
-      const BlockGraph g = block_graph(m);
-      const std::vector<std::int32_t> part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
-      rank_q = partition_quality(g, part, rk.size, {});
-      PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
-      halo = std::make_unique<HaloExchange>(pm, part);
-      Case part_case = c;
-      part_case.fixed_dt = sim.dt();
-      part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
-      WholeModelSetup ws{sim.omega2_max(), {}};
-      if (!m.damping.empty())
-        for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
-      part_sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
-      part_sim->make_part(sim, pm, part);
-      halo->exchange(part_sim->model());
-      part_uplift = UpliftTracker(part_sim->model(), up_direction(m, c.analysis.up), 0);
+      halo.emplace(c, mesh, sim, rk);
+      rank_q = halo->quality;
       ranks_mode = "halo";
       if (!opt.quiet)
         spdlog::info("{} ranks ({} on this machine), the halo stage: {} parts by {}, {}-{} blocks each, "
@@ -417,12 +443,12 @@ RunResult run_case(const Case& c, const RunOptions& options) {
                      "{} ghost blocks, {} neighbours",
                      rk.size, rk.local_size, rk.size, have_metis() ? "METIS" : "ranges of the block order",
                      rank_q.blocks_min, rank_q.blocks_max, rank_q.imbalance, 100 * rank_q.edge_cut_share,
-                     pm.own_blocks, pm.ghost_blocks, halo->peers().size());
+                     halo->own_blocks, halo->ghost_blocks, halo->exchange->peers().size());
     }
   }
   // The replicated stage: every rank steps the whole model; the block kernel is divided among the
   // ranks by contiguous ranges of the Hilbert order.
-  if (rk.size > 1 && !part_sim) {
+  if (rk.size > 1 && !halo) {
     const auto groups = charge_groups(m.n_blocks(), bars, solids);
     const BlockGraph g = block_graph(m, groups);
     const auto rank_blocks = block_ranges(g, rk.size);
@@ -535,7 +561,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     return &crack_gas;
   };
   // Wall time per step kernel (summary.json kernel_time_s; a few clock reads per step).
-  (part_sim ? *part_sim : sim).set_timer(&kernel_times);
+  (halo ? *halo->sim : sim).set_timer(&kernel_times);
   const auto loop0 = Clock::now();
   auto elapsed = [](Clock::time_point since) {
     return std::chrono::duration<double>(Clock::now() - since).count();
@@ -585,10 +611,9 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     const auto step0 = Clock::now();
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
     int stop_flags = 0;  // (the halo stage: the signal and the wall-clock checkpoint, agreed by the ranks)
-    if (part_sim) {
-      part_sim->step(hist);
-      halo->exchange(part_sim->model());
-      part_uplift.update(part_sim->model());
+    if (halo) {
+      halo->step(hist);
+      const Simulation& part_sim = *halo->sim;
       // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
       // end or stop; and with reactions to measure, before a sampled step the velocities they
       // read.
@@ -597,19 +622,19 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       double nh = next_hist;
       if (hist)
         while (nh <= t_state + 0.5 * dt) nh += std::max(c.history_interval, dt);
-      const bool next_hist_due = !reactions.empty() && (part_sim->time() >= nh - 0.5 * dt || k + 2 == steps_limit);
+      const bool next_hist_due = !reactions.empty() && (part_sim.time() >= nh - 0.5 * dt || k + 2 == steps_limit);
       if (hist || field || k + 1 == steps_limit || stop_flags != 0 ||
-          (c.checkpoint_interval > 0 && part_sim->time() >= next_ckpt - 0.5 * dt))
-        sim.gather_parts(*part_sim, &part_uplift.per_node(), &uplift.per_node());
+          (c.checkpoint_interval > 0 && part_sim.time() >= next_ckpt - 0.5 * dt))
+        sim.gather_parts(part_sim, &halo->uplift.per_node(), &uplift.per_node());
       else
-        sim.follow_clock(*part_sim);
-      if (next_hist_due) sim.gather_velocities(*part_sim, reaction_nodes);
+        sim.follow_clock(part_sim);
+      if (next_hist_due) sim.gather_velocities(part_sim, reaction_nodes);
     } else {
       sim.step(hist);
     }
     if (const std::string msg = governor.after_step(elapsed(step0)); !msg.empty() && !opt.quiet)
       spdlog::info("{}", msg);
-    if (!part_sim) uplift.update(m);
+    if (!halo) uplift.update(m);
     if (hist) {
       // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
       while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
@@ -653,7 +678,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     }
     // A signal reaches the ranks at different steps: they stop together, at the step of the
     // first to see it.
-    if (const int sig = part_sim ? (stop_flags & 0xff)
+    if (const int sig = halo ? (stop_flags & 0xff)
                                  : rk.size > 1 ? static_cast<int>(max_over_ranks(stop_signal())) : stop_signal()) {
       write_state();
       res.status = 128 + sig;
@@ -667,7 +692,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     }
     if (k + 1 == steps_limit ||
         (c.checkpoint_interval > 0 && sim.time() >= next_ckpt - 0.5 * dt) ||
-        (part_sim ? (stop_flags >> 8) != 0
+        (halo ? (stop_flags >> 8) != 0
                   : c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval)) {
       write_state();
       if (c.checkpoint_interval > 0)

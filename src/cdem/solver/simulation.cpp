@@ -272,18 +272,7 @@ void Simulation::step(bool sample) {
   auto inv = block_forces(m_, &first, /*gather_springs=*/true, own_lo_, own_hi_);
   if (!rank_blocks_.empty()) inv = share_blocks(inv);
   if (halo_) {
-    // a part: its own blocks' count and first (global) block, summed over the parts at the end
-    // of the step (part_sums)
-    const std::int64_t any = inv;
-    inv = 0;
-    first = -1;
-    if (any > 0)
-      for (std::size_t b = 0; b < m_.n_blocks(); ++b)
-        if (halo_own_block(b) && !(m_.vol_ratio[b] > 0) && !m_.block_materials[m_.block_material[b]].charge_block &&
-            m_.block_materials[m_.block_material[b]].explosive.empty()) {
-          if (first < 0) first = halo_global_block(b);
-          ++inv;
-        }
+    part_inverted(inv, first);  // a part: its own blocks (over the whole model in part_sums)
   } else if (inv > 0) {
     // A bar's charge blocks (mostly products: little or no rock stiffness) may collapse once the
     // gas has left them; that is not the rock inverting (the run goes on). Recounted here, in

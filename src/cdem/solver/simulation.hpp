@@ -215,8 +215,8 @@ class Simulation {
   // a part's step sums over the whole model (make_part)
   void part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
                  std::int32_t& first);
-  bool halo_own_block(std::size_t b) const;
-  std::int32_t halo_global_block(std::size_t b) const;
+  // a part's inverted blocks: its own blocks' count and first (global) block
+  void part_inverted(std::int64_t& inv, std::int32_t& first) const;
   std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)
   std::vector<double> con_terms_;  // a part's step, springs mode: two terms per constraint
 };

@@ -159,8 +159,20 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
 }
 
 // The step's sums over the whole model, in its order (step(), after load_work): see the top.
-bool Simulation::halo_own_block(std::size_t b) const { return halo_->own_block[b] != 0; }
-std::int32_t Simulation::halo_global_block(std::size_t b) const { return halo_->block[b]; }
+void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
+  // (as step() recounts them: a charge's blocks may collapse, the rock may not)
+  const bool any = inv > 0;
+  inv = 0;
+  first = -1;
+  if (!any) return;
+  for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+    const BlockMaterial& mt = m_.block_materials[m_.block_material[b]];
+    if (halo_->own_block[b] && !(m_.vol_ratio[b] > 0) && !mt.charge_block && mt.explosive.empty()) {
+      if (first < 0) first = halo_->block[b];
+      ++inv;
+    }
+  }
+}
 
 void Simulation::part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
                            std::int32_t& first) {

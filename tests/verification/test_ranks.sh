@@ -30,8 +30,8 @@ run() {
 # same A B: every output of run A equals run B's (files byte for byte, summary.json's physics).
 same() {
   local a=$1 b=$2
-  (cd "$a" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' | sort) > "$TMP/files_a"
-  (cd "$b" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' | sort) > "$TMP/files_b"
+  (cd "$a" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' ! -name partition.vtu | sort) > "$TMP/files_a"
+  (cd "$b" && find . -type f ! -name summary.json ! -path './checkpoints/*' ! -name '.lock' ! -name partition.vtu | sort) > "$TMP/files_b"
   cmp -s "$TMP/files_a" "$TMP/files_b" || fail "$b: not the same files as $a: $(diff "$TMP/files_a" "$TMP/files_b" | head -5)"
   [ "$(wc -l < "$TMP/files_a")" -gt 8 ] || fail "$a: too few outputs to compare"
   while read -r f; do
@@ -156,6 +156,15 @@ for f in energy.csv monitors.csv fracture.csv grading.csv reactions.csv; do
   cmp -s "$TMP/h_H3_1/$f" "$TMP/h_c/$f" || fail "3D box continued: $f differs from the 1-rank run's"
 done
 same "$TMP/h_c0" "$TMP/h_c"
+# partition.vtu: each block's rank, as many parts as ranks (read with the package's VTU reader)
+PYTHONPATH="$ROOT/python" "$PY" - "$TMP/h_H3_3/partition.vtu" "$TMP/h_H3_1/summary.json" <<'EOF' || fail "partition.vtu of the 3-rank run"
+import json, sys
+from cdemblast.vtu import read_vtu
+part = read_vtu(sys.argv[1]).cell_array("part")
+assert sorted(set(int(p) for p in part)) == [0, 1, 2], sorted(set(part))
+assert len(part) == json.load(open(sys.argv[2]))["blocks"]
+EOF
+[ ! -e "$TMP/h_H3_1/partition.vtu" ] || fail "one process wrote a partition.vtu"
 # check --parts says which stage a run on that many ranks takes, and why not the halo stage
 "$BIN" check "${H3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the 3D box's stage"
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step charges" ||

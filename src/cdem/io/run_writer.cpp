@@ -186,13 +186,11 @@ void RunWriter::write_reactions(double t, const std::vector<std::string>& face_s
                  force[k].z);
 }
 
-void RunWriter::write_fields(const Model& m, double t, const std::vector<double>* max_up,
-                             const std::vector<float>* gas_pressure) {
-  const std::string name = fmt::format("{:04d}", frame_++);
-  // ---- blocks, each with its own nodes (cracks open as gaps) ----
+namespace {
+// The blocks as VTK cells, each with its own nodes at `points` (cracks open as gaps).
+VtuMesh block_cells(const Model& m, std::vector<Vec3> points) {
   VtuMesh vm;
-  vm.time = t;
-  vm.points = m.x;
+  vm.points = std::move(points);
   const std::size_t nb = m.n_blocks();
   vm.types.reserve(nb);
   for (std::size_t b = 0; b < nb; ++b) {
@@ -201,6 +199,23 @@ void RunWriter::write_fields(const Model& m, double t, const std::vector<double>
     vm.types.push_back(m.block_type[b] == ElemType::Tri3   ? kVtkTriangle
                        : m.block_type[b] == ElemType::Quad4 ? kVtkQuad : kVtkTetra);
   }
+  return vm;
+}
+}  // namespace
+
+void RunWriter::write_partition(const Model& m, const std::vector<std::int32_t>& part) {
+  VtuMesh vm = block_cells(m, m.X_nodes());
+  vm.cell_data.push_back(VtuArray{"part", 1, {}, part, VtuType::kInt32});
+  write_vtu((std::filesystem::path(dir_) / "partition.vtu").string(), vm);
+}
+
+void RunWriter::write_fields(const Model& m, double t, const std::vector<double>* max_up,
+                             const std::vector<float>* gas_pressure) {
+  const std::string name = fmt::format("{:04d}", frame_++);
+  // ---- blocks, each with its own nodes (cracks open as gaps) ----
+  VtuMesh vm = block_cells(m, m.x);
+  vm.time = t;
+  const std::size_t nb = m.n_blocks();
   VtuArray disp{"displacement", 3, {}, {}}, vel{"velocity", 3, {}, {}};
   for (std::size_t n = 0; n < m.n_nodes(); ++n) {
     const Vec3 u = m.x[n] - m.X(n);

@@ -44,6 +44,9 @@ class RunWriter {
   // pressure on its faces (Pa; crack cell array gas_pressure, 0 where none or when null).
   void write_fields(const Model& m, double t, const std::vector<double>* max_up = nullptr,
                     const std::vector<float>* gas_pressure = nullptr);
+  // partition.vtu: the blocks in their reference place with the rank that steps each (cell
+  // array `part`), written once by a distributed run (docs/parallel.md).
+  void write_partition(const Model& m, const std::vector<std::int32_t>& part);
   // reactions.csv rows (time, face_set, fx, fy, fz), one per face set; the file is created at
   // the first call.
   void write_reactions(double t, const std::vector<std::string>& face_sets, const std::vector<Vec3>& force);

@@ -354,13 +354,14 @@ struct HaloRun {
   std::unique_ptr<Simulation> sim;
   std::unique_ptr<HaloExchange> exchange;
   UpliftTracker uplift{Model{}, Vec3{0, 0, 1}, 0};
+  std::vector<std::int32_t> part;  // the rank stepping each block of the whole model
   PartitionQuality quality;
   std::size_t own_blocks = 0, ghost_blocks = 0;
 
   HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const RankInfo& rk) {
     const Model& m = whole.model();
     const BlockGraph g = block_graph(m);
-    const std::vector<std::int32_t> part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
+    part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
     quality = partition_quality(g, part, rk.size, {});
     PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
     own_blocks = pm.own_blocks;
@@ -425,6 +426,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   // model's state (`sim`, set up on every rank) is gathered from the parts when the loop reads
   // it. A restart continues in the replicated stage (the checkpoint is the whole model's).
   PartitionQuality rank_q;
+  std::vector<std::int32_t> rank_part;  // the rank stepping each block (partition.vtu)
   std::string ranks_mode = rk.size > 1 ? "replicated" : "one";
   std::optional<HaloRun> halo;
   if (rk.size > 1 && opt.ranks_mode != "replicated") {
@@ -436,6 +438,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     if (why.empty()) {
       halo.emplace(c, mesh, sim, rk);
       rank_q = halo->quality;
+      rank_part = halo->part;
       ranks_mode = "halo";
       if (!opt.quiet)
         spdlog::info("{} ranks ({} on this machine), the halo stage: {} parts by {}, {}-{} blocks each, "
@@ -453,7 +456,8 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     const BlockGraph g = block_graph(m, groups);
     const auto rank_blocks = block_ranges(g, rk.size);
     sim.distribute(rank_blocks, rk.rank);
-    rank_q = partition_quality(g, ranges_to_parts(rank_blocks), rk.size, groups);
+    rank_part = ranges_to_parts(rank_blocks);
+    rank_q = partition_quality(g, rank_part, rk.size, groups);
     if (!opt.quiet)
       spdlog::info("{} ranks ({} on this machine): {}-{} blocks each, imbalance {:.3f}, {:.2f} % of "
                    "the interfaces between ranks, {} charges across ranks",
@@ -512,6 +516,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   }
   std::optional<RunWriter> out;
   if (root) out.emplace(opt.out_dir, c, &m, run_id, has_charges ? charge_csv_header() : "", ckpt ? &*ckpt : nullptr);
+  if (out && !rank_part.empty()) out->write_partition(m, rank_part);
   // reactions.csv (constrained face sets)
   ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
   // (the halo stage gathers their velocities before a sampled step: ascending, without repeats)

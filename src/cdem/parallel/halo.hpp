@@ -19,9 +19,10 @@
 // its ghost nodes' positions and velocities are the whole model's (their owners'; the ghosts'
 // own forces are incomplete, their motion is not computed here but received).
 //
-// Built and verified so far (tests/verification/test_halo.cpp): the cut and the ghost zone, with
-// the ghosts refreshed from a whole-model run. Not yet: the exchange between ranks, the
-// reductions in global order, contact, charges and gas (docs/parallel.md, the plan).
+// Verified by tests/verification/test_halo.cpp (ghosts copied from a whole-model run) and
+// tests/mpi/test_halo_mpi.cpp (ghosts received over MPI); the run uses it through
+// solver/simulation_halo.cpp (the step's sums over the model in its order, the gathers) and
+// run.cpp. Not yet: contact, charges and their gas (docs/parallel.md, the plan).
 #pragma once
 #include <cstdint>
 #include <vector>

@@ -1,0 +1,45 @@
+// The halo stage's side of a run (run_halo.hpp): which cases it steps, and this rank's part.
+#include "cdem/solver/run_halo.hpp"
+
+#include "cdem/solver/run.hpp"
+
+namespace cdem {
+
+std::string halo_unsupported(const Case& c) {
+  if (!c.holes.empty()) return "charges (their bars, gas and explosive blocks span the parts)";
+  if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
+  for (const auto& mt : c.materials) {
+    if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
+    if (mt.stiffness_damping > 0) return "stiffness-proportional damping (its work summed over the model each step)";
+  }
+  return "";
+}
+
+HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const RankInfo& rk) {
+  const Model& m = whole.model();
+  const BlockGraph g = block_graph(m);
+  part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
+  quality = partition_quality(g, part, rk.size, {});
+  PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
+  own_blocks = pm.own_blocks;
+  ghost_blocks = pm.ghost_blocks;
+  exchange = std::make_unique<HaloExchange>(pm, part);
+  Case part_case = c;
+  part_case.fixed_dt = whole.dt();
+  part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
+  WholeModelSetup ws{whole.omega2_max(), {}};
+  if (!m.damping.empty())
+    for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
+  sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
+  sim->make_part(whole, pm, part);
+  exchange->exchange(sim->model());  // (the set-up's cluster velocities of the ghosts)
+  uplift = UpliftTracker(sim->model(), up_direction(m, c.analysis.up), 0);
+}
+
+void HaloRun::step(bool sample) {
+  sim->step(sample);
+  exchange->exchange(sim->model());
+  uplift.update(sim->model());
+}
+
+}  // namespace cdem

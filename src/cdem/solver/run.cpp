@@ -338,34 +338,38 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     if (hist) reactions.before_step(m);
     const auto step0 = Clock::now();
     const bool field = next_field < field_times.size() && t_state >= field_times[next_field] - 0.5 * dt;
-    int stop_flags = 0;  // (the halo stage: the signal and the wall-clock checkpoint, agreed by the ranks)
-    if (halo) {
+    // (the next sample's time; an interval below dt samples every step: stepping by it could
+    // stall, 1e-30 + t == t)
+    if (hist)
+      while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
+    if (halo)
       halo->step(hist);
-      const Simulation& part_sim = *halo->sim;
+    else
+      sim.step(hist);
+    // A signal reaches the ranks at different steps: they stop together, at the step of the first
+    // to see it. A checkpoint on the wall clock is due by rank 0's clock (it alone writes).
+    std::int64_t flags = 2 * static_cast<std::int64_t>(stop_signal()) +
+                         (root && c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval);
+    if (rk.size > 1) flags = max_over_ranks(flags);
+    const int sig = static_cast<int>(flags / 2);
+    const bool wall_checkpoint = (flags & 1) != 0;
+    if (halo) {
       // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
       // end or stop; and with reactions to measure, before a sampled step the velocities they
       // read.
-      stop_flags = static_cast<int>(max_over_ranks(
-          stop_signal() | ((c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval) << 8)));
-      double nh = next_hist;
-      if (hist)
-        while (nh <= t_state + 0.5 * dt) nh += std::max(c.history_interval, dt);
-      const bool next_hist_due = !reactions.empty() && (part_sim.time() >= nh - 0.5 * dt || k + 2 == steps_limit);
-      if (hist || field || k + 1 == steps_limit || stop_flags != 0 ||
+      const Simulation& part_sim = *halo->sim;
+      const bool next_hist_due = !reactions.empty() && (part_sim.time() >= next_hist - 0.5 * dt || k + 2 == steps_limit);
+      if (hist || field || k + 1 == steps_limit || sig != 0 || wall_checkpoint ||
           (c.checkpoint_interval > 0 && part_sim.time() >= next_ckpt - 0.5 * dt))
         sim.gather_parts(part_sim, &halo->uplift.per_node(), &uplift.per_node());
       else
         sim.follow_clock(part_sim);
       if (next_hist_due) sim.gather_velocities(part_sim, reaction_nodes);
-    } else {
-      sim.step(hist);
     }
     if (const std::string msg = governor.after_step(elapsed(step0)); !msg.empty() && !opt.quiet)
       spdlog::info("{}", msg);
     if (!halo) uplift.update(m);
     if (hist) {
-      // An interval below dt samples every step; stepping by it could stall (1e-30 + t == t).
-      while (next_hist <= t_state + 0.5 * dt) next_hist += std::max(c.history_interval, dt);
       last = sim.energy();
       // The ranks' states are the same bits (ranks.hpp): checked at each sample.
       if (rk.size > 1 && !same_over_ranks(energy_bits(last)))
@@ -404,10 +408,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
         out->check_written();
       }
     }
-    // A signal reaches the ranks at different steps: they stop together, at the step of the
-    // first to see it.
-    if (const int sig = halo ? (stop_flags & 0xff)
-                                 : rk.size > 1 ? static_cast<int>(max_over_ranks(stop_signal())) : stop_signal()) {
+    if (sig != 0) {
       write_state();
       res.status = 128 + sig;
       res.diagnosis = fmt::format("interrupted by {} at t = {:.6g} s (step {}); continue it with "
@@ -420,8 +421,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     }
     if (k + 1 == steps_limit ||
         (c.checkpoint_interval > 0 && sim.time() >= next_ckpt - 0.5 * dt) ||
-        (halo ? (stop_flags >> 8) != 0
-                  : c.checkpoint_wall_interval > 0 && elapsed(last_checkpoint) >= c.checkpoint_wall_interval)) {
+        wall_checkpoint) {
       write_state();
       if (c.checkpoint_interval > 0)
         while (next_ckpt <= sim.time() + 0.5 * dt) next_ckpt += c.checkpoint_interval;

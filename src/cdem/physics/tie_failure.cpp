@@ -69,6 +69,7 @@ std::uint8_t tie_strength_exceeded(const SpringLaw& law, double fn, double fs2, 
 
 double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag,
                    std::vector<std::pair<std::int64_t, double>>* terms) {
+  if (terms) terms->clear();
   const auto ni = static_cast<std::int64_t>(m.n_ifaces());
   const int np = m.springs_per_iface;
   if (flag.size() != static_cast<std::size_t>(ni)) flag.assign(ni, 0);

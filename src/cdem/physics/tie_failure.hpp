@@ -33,7 +33,7 @@ std::uint8_t tie_strength_exceeded(const SpringLaw& law, double fn, double fs2, 
 // Tests every interface with a tied point that can break (Model::iface_check), unties those
 // that fail (in ascending interface order, serially: deterministic) and returns the insertion
 // energy (J). `flag` is a per-interface work array (sized at set-up by the caller). `terms`, when
-// given, receives the insertion energy's terms in the order summed: (spring point, J).
+// given, is set to the insertion energy's terms in the order summed: (spring point, J).
 double tie_failure(Model& m, double t, std::vector<std::uint8_t>& flag,
                    std::vector<std::pair<std::int64_t, double>>* terms = nullptr);
 

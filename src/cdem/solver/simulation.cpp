@@ -286,10 +286,6 @@ void Simulation::step(bool sample) {
         ++inv;
       }
   }
-  if (!halo_) {
-    if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
-    inverted_ = inv;
-  }
   // 3b. stiffness-proportional damping of the blocks (when a material has it)
   if (beta_max_ > 0) stiffness_damping_forces(m_, sd_force_, sd_power_);
   lap(kStepBlocks);
@@ -304,7 +300,6 @@ void Simulation::step(bool sample) {
   lap(kStepLoads);
   // 6. tied mode: ties broken by the blocks' traction are untied (their force added to f)
   if (m_.tied) {
-    insert_terms_.clear();
     const double insertion = tie_failure(m_, t_, tie_flag_, halo_ ? &insert_terms_ : nullptr);
     if (!halo_) w_insert_ += insertion;  // (a part: over the whole model, part_sums)
   }
@@ -345,11 +340,10 @@ void Simulation::step(bool sample) {
   }
   double step_absorbed = 0, load_after = 0;
   step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
-  if (halo_) {  // a part: these sums and the inverted blocks over the whole model
-    part_sums(step_boundary, step_absorbed, load_after, inv, first);
-    if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
-    inverted_ = inv;
-  }
+  // a part: these sums and the inverted blocks over the whole model
+  if (halo_) part_sums(step_boundary, step_absorbed, load_after, inv, first);
+  if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
+  inverted_ = inv;
   last_boundary_ += load_after;
   w_boundary_ += step_boundary;
   w_explosive_ += step_explosive;

@@ -210,7 +210,7 @@ class Simulation {
   std::vector<std::int64_t> rank_slices_;  // scratch: the slices' offsets in spring_buf_
   int rank_ = 0;
   // The halo stage: a part's indices (make_part), the whole's gather lists (gather_parts).
-  std::shared_ptr<const HaloIndex> halo_;
+  std::shared_ptr<HaloIndex> halo_;
   std::shared_ptr<const HaloGatherLists> gather_;
   // a part's step sums over the whole model (make_part)
   void part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,

@@ -31,6 +31,10 @@ struct HaloIndex {
   std::vector<std::pair<std::int32_t, std::int32_t>> loads;  // boundary load facets
   std::vector<std::pair<std::int32_t, std::int32_t>> con;    // constrained vertices (tied), constraints (springs)
   std::size_t n_work = 0, n_con = 0;                         // the whole's counts
+  // part_sums' buffers, grown in the first steps and kept (no allocation in a step after)
+  std::vector<double> mine, all, work_terms, con_terms;
+  std::vector<std::int64_t> at;
+  std::vector<std::pair<std::int64_t, double>> ins;
 };
 
 // On the whole model: per rank, its own entities in ascending global order.
@@ -158,7 +162,6 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
   halo_ = std::move(h);
 }
 
-// The step's sums over the whole model, in its order (step(), after load_work): see the top.
 void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
   // (as step() recounts them: a charge's blocks may collapse, the rock may not)
   const bool any = inv > 0;
@@ -174,11 +177,12 @@ void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
   }
 }
 
+// The step's sums over the whole model, in its order (step(), after load_work): see the top.
 void Simulation::part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
                            std::int32_t& first) {
-  const HaloIndex& h = *halo_;
-  std::vector<double> mine{static_cast<double>(inv), static_cast<double>(first), static_cast<double>(h.work.size()),
-                           static_cast<double>(h.con.size()), 0.0};
+  HaloIndex& h = *halo_;
+  std::vector<double>& mine = h.mine;
+  mine.assign({static_cast<double>(inv), static_cast<double>(first), 0.0, static_cast<double>(h.con.size()), 0.0});
   // (a node whose four terms are zero, most of a boundary at rest or only constrained, is left
   // out: adding a zero to the sums changes no bit, as they never hold -0; fma(+-0, dt, w) = w)
   std::size_t nwork = 0;
@@ -205,11 +209,13 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
     ++nins;
   }
   mine[4] = static_cast<double>(nins);
-  std::vector<double> all;
-  std::vector<std::int64_t> at;
-  gather_all(mine, all, at);
-  std::vector<double> work(4 * h.n_work, 0.0), con(2 * h.n_con, 0.0);
-  std::vector<std::pair<std::int64_t, double>> ins;
+  std::vector<double>&all = h.all, &work = h.work_terms, &con = h.con_terms;
+  std::vector<std::pair<std::int64_t, double>>& ins = h.ins;
+  gather_all(mine, all, h.at);
+  const std::vector<std::int64_t>& at = h.at;
+  work.assign(4 * h.n_work, 0.0);
+  con.assign(2 * h.n_con, 0.0);
+  ins.clear();
   inv = 0;
   first = -1;
   for (int r = 0; r < h.ranks; ++r) {

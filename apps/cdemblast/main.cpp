@@ -56,11 +56,12 @@ void print_partition(const cdem::Case& c, const cdem::PreparedCase& pc, int part
     return;
   }
   fmt::print("partition   {} parts (METIS k-way): {} to {} blocks, load imbalance {:.3f}, {} interfaces "
-             "cut ({:.2f} %), ghost blocks {:.0f} (mean) / {} (max) per part, {:.1f} / {} neighbours, "
-             "{:.3g} / {:.3g} kB exchanged per part per step; {} of the charges split\n",
+             "cut ({:.2f} %), ghost blocks (the halo stage's two rings) {:.0f} (mean) / {} (max) per part, "
+             "{:.2f} times the model's blocks stepped in all, {:.1f} / {} neighbours, {:.3g} / {:.3g} kB "
+             "exchanged per part per step; {} of the charges split\n",
              parts, q.blocks_min, q.blocks_max, q.imbalance, q.edge_cut, 100 * q.edge_cut_share,
-             q.ghosts_mean, q.ghosts_max, q.neighbours_mean, q.neighbours_max, q.bytes_mean / 1e3,
-             q.bytes_max / 1e3, q.together_split);
+             q.ghosts_mean, q.ghosts_max, q.stepped_share, q.neighbours_mean, q.neighbours_max,
+             q.bytes_mean / 1e3, q.bytes_max / 1e3, q.together_split);
 }
 
 int cmd_check(const std::string& path, const std::vector<std::string>& sets, int parts) {

@@ -6,6 +6,7 @@
 #include <set>
 #include <vector>
 
+#include "cdem/parallel/halo.hpp"
 #include "cdem/parallel/partition.hpp"
 #include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
@@ -68,8 +69,10 @@ TEST(Partition, BenchModelBalanced) {
 }
 
 // The exchange model counts what it says. A 2 x 1 x 1 box of two cubes (6 tets each), one cube
-// per part: the square between the cubes is split into 2 triangles, each shared by one tet of
-// each cube, so 2 interfaces are cut and each part has 2 ghost blocks and 1 neighbour.
+// per part: the square between the cubes is split into 2 triangles, so 2 interfaces are cut. Each
+// cube's 6 tets share its main diagonal, whose one end is on the square: every tet of one cube
+// shares a vertex with the other cube, so each part's ghost zone (ring 1) is the other cube's 6
+// tets, and each part has 1 neighbour.
 TEST(Partition, QualityCountsTheCut) {
   const Mesh mesh = bench::structured_tet_box(2, 1, 1, 1.0);
   const BlockGraph g = mesh_block_graph(mesh);
@@ -78,12 +81,65 @@ TEST(Partition, QualityCountsTheCut) {
   for (int e = 0; e < 12; ++e) part[e] = e < 6 ? 0 : 1;  // first cube, second cube
   const auto q = partition_quality(g, part, 2);
   EXPECT_EQ(q.edge_cut, 2);
-  EXPECT_EQ(q.ghosts_max, 2);
+  EXPECT_EQ(q.ghosts_max, 6);
   EXPECT_EQ(q.neighbours_max, 1);
-  // 2 ghosts x 4 nodes x 6 doubles x 8 bytes, received and sent, + 2 cut faces x 3 points x 3
-  // doubles x 8 bytes
-  EXPECT_DOUBLE_EQ(q.bytes_max, 2 * (2 * 4 * 6 * 8) + 2 * 3 * 3 * 8);
+  EXPECT_DOUBLE_EQ(q.messages_max, 2.0);
+  // 6 ghosts x 4 nodes x 6 doubles x 8 bytes, received and sent
+  EXPECT_DOUBLE_EQ(q.bytes_max, 2 * (6 * 4 * 6 * 8));
+  EXPECT_DOUBLE_EQ(q.stepped_share, 2.0);  // each part steps the whole box
   EXPECT_DOUBLE_EQ(q.imbalance, 1.0);
+}
+
+// The exchange model's ghost zones are the halo stage's (halo.cpp, part_blocks, which the
+// distributed runs step): on the bench box in 2, 3 and 7 METIS parts, each part's ghost blocks,
+// the weight it steps, the bytes it receives and its neighbours, counted here from part_blocks's
+// zones, give the same maxima and means as partition_quality (which forms every zone at once
+// from the vertex and face lists).
+TEST(Partition, QualityCountsTheHaloZone) {
+  if (!have_metis()) GTEST_SKIP() << "built without METIS";
+  const auto cells = bench::tet_cells_for(3000);
+  const Mesh mesh = bench::structured_tet_box(cells[0], cells[1], cells[2], 0.05);
+  const Model m = build_case_model(bench::box_case(3, {1, 1, 1}, 0.05, InterfaceLaw::MohrCoulomb, 0), mesh);
+  const BlockGraph g = block_graph(m);
+  for (int parts : {2, 3, 7}) {
+    const auto part = partition_kway(g, parts);
+    const auto q = partition_quality(g, part, parts);
+    std::int64_t ghosts_max = 0;
+    double ghosts_sum = 0, stepped_max = 0, recv_sum = 0;
+    std::vector<double> bytes(parts, 0.0);
+    std::vector<std::set<int>> peers(parts);
+    for (int p = 0; p < parts; ++p) {
+      std::vector<std::int32_t> blocks;
+      std::vector<std::uint8_t> own;
+      part_blocks(m, part, p, blocks, own);
+      std::int64_t ghosts = 0;
+      double stepped = 0;
+      for (std::size_t k = 0; k < blocks.size(); ++k) {
+        const auto b = static_cast<std::size_t>(blocks[k]);
+        stepped += g.vwgt[b];
+        if (own[k]) continue;
+        ++ghosts;
+        const double state = 48.0 * (m.block_first_node[b + 1] - m.block_first_node[b]);
+        bytes[p] += state;
+        bytes[part[b]] += state;
+        recv_sum += state;
+        peers[p].insert(part[b]);
+        peers[part[b]].insert(p);
+      }
+      ghosts_max = std::max(ghosts_max, ghosts);
+      ghosts_sum += static_cast<double>(ghosts);
+      stepped_max = std::max(stepped_max, stepped);
+    }
+    std::size_t nmax = 0;
+    for (const auto& s : peers) nmax = std::max(nmax, s.size());
+    EXPECT_EQ(q.ghosts_max, ghosts_max) << parts << " parts";
+    EXPECT_DOUBLE_EQ(q.ghosts_mean, ghosts_sum / parts) << parts << " parts";
+    EXPECT_DOUBLE_EQ(q.stepped_max, stepped_max) << parts << " parts";
+    EXPECT_DOUBLE_EQ(q.bytes_max, *std::max_element(bytes.begin(), bytes.end())) << parts << " parts";
+    EXPECT_NEAR(q.bytes_mean, 2 * recv_sum / parts, 1e-9 * recv_sum) << parts << " parts";
+    EXPECT_EQ(q.neighbours_max, static_cast<int>(nmax)) << parts << " parts";
+    EXPECT_GT(q.ghosts_max, 0);
+  }
 }
 
 // The ranks' division of a distributed run (block_ranges): contiguous ranges that cover every

@@ -35,14 +35,6 @@ void fill_csr(BlockGraph& g, std::size_t n, const std::vector<std::array<std::in
   }
 }
 
-// Nodes of the model's typical block for the exchange model: 4 in 3D (tets); in 2D 4 when
-// quadrilaterals are the majority, else 3.
-int typical_nodes(int dim, const std::vector<ElemType>& types) {
-  if (dim == 3) return 4;
-  const auto quads = std::count(types.begin(), types.end(), ElemType::Quad4);
-  return 2 * static_cast<std::size_t>(quads) > types.size() ? 4 : 3;
-}
-
 }  // namespace
 
 std::int32_t block_weight(ElemType type, int interfaces) {
@@ -92,7 +84,8 @@ BlockGraph block_graph(const Model& m, const std::vector<std::int32_t>& together
   fill_csr(g, n, edges);
   g.vwgt.resize(n);
   for (std::size_t b = 0; b < n; ++b) g.vwgt[b] = block_weight(m.block_type[b], g.xadj[b + 1] - g.xadj[b]);
-  g.nodes_per_block = typical_nodes(m.dim, m.block_type);
+  g.bv_offset.assign(m.block_first_node.begin(), m.block_first_node.end());
+  g.bv.assign(m.node_vertex.begin(), m.node_vertex.end());
   return g;
 }
 
@@ -114,7 +107,12 @@ BlockGraph mesh_block_graph(const Mesh& mesh) {
   fill_csr(g, n, edges);
   g.vwgt.resize(n);
   for (std::size_t e = 0; e < n; ++e) g.vwgt[e] = block_weight(mesh.elem_type[e], g.xadj[e + 1] - g.xadj[e]);
-  g.nodes_per_block = typical_nodes(mesh.dim, mesh.elem_type);
+  g.bv_offset.assign(n + 1, 0);
+  for (std::size_t e = 0; e < n; ++e) g.bv_offset[e + 1] = g.bv_offset[e] + nodes_of(mesh.elem_type[e]);
+  g.bv.resize(static_cast<std::size_t>(g.bv_offset[n]));
+  for (std::size_t e = 0; e < n; ++e)
+    for (int k = 0; k < nodes_of(mesh.elem_type[e]); ++k)
+      g.bv[static_cast<std::size_t>(g.bv_offset[e] + k)] = mesh.elem_vertices[e][static_cast<std::size_t>(k)];
   return g;
 }
 
@@ -165,67 +163,135 @@ std::vector<std::int32_t> partition_kway(const BlockGraph& g, int parts, double 
 #endif
 }
 
+namespace {
+
+// (part, block) as one sortable key
+std::uint64_t key_of(std::int32_t p, std::int32_t b) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(p)) << 32) | static_cast<std::uint32_t>(b);
+}
+std::int32_t key_part(std::uint64_t k) { return static_cast<std::int32_t>(k >> 32); }
+std::int32_t key_block(std::uint64_t k) { return static_cast<std::int32_t>(k & 0xffffffffu); }
+
+void sort_unique(std::vector<std::uint64_t>& v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
+// Every part's ghost zone as the halo stage builds it (halo.cpp, part_blocks), all parts at once:
+// the (part, ghost block) keys, sorted. Ring 1: the blocks of other parts at a vertex that a part
+// touches; ring 2: their face neighbours of other parts.
+std::vector<std::uint64_t> halo_ghosts(const BlockGraph& g, const std::vector<std::int32_t>& part) {
+  const std::size_t n = g.n();
+  std::int32_t nv = 0;
+  for (auto v : g.bv) nv = std::max(nv, v + 1);
+  // vertex -> blocks (CSR)
+  std::vector<std::int64_t> start(static_cast<std::size_t>(nv) + 1, 0);
+  for (auto v : g.bv) ++start[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) start[v + 1] += start[v];
+  std::vector<std::int32_t> list(g.bv.size());
+  {
+    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t b = 0; b < n; ++b)
+      for (auto k = g.bv_offset[b]; k < g.bv_offset[b + 1]; ++k)
+        list[static_cast<std::size_t>(fill[static_cast<std::size_t>(g.bv[static_cast<std::size_t>(k)])]++)] =
+            static_cast<std::int32_t>(b);
+  }
+  std::vector<std::uint64_t> ring1;
+  std::vector<std::int32_t> at;  // the parts at a vertex
+  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) {
+    at.clear();
+    for (auto k = start[v]; k < start[v + 1]; ++k) {
+      const auto p = part[static_cast<std::size_t>(list[static_cast<std::size_t>(k)])];
+      if (std::find(at.begin(), at.end(), p) == at.end()) at.push_back(p);
+    }
+    if (at.size() < 2) continue;
+    for (auto k = start[v]; k < start[v + 1]; ++k) {
+      const auto b = list[static_cast<std::size_t>(k)];
+      for (auto p : at)
+        if (p != part[static_cast<std::size_t>(b)]) ring1.push_back(key_of(p, b));
+    }
+  }
+  std::vector<std::int64_t>().swap(start);
+  std::vector<std::int32_t>().swap(list);
+  sort_unique(ring1);
+  std::vector<std::uint64_t> ring2;
+  for (auto k : ring1) {
+    const auto p = key_part(k), b = key_block(k);
+    for (auto e = g.xadj[b]; e < g.xadj[b + 1]; ++e) {
+      const auto o = g.adjncy[e];
+      if (part[static_cast<std::size_t>(o)] == p) continue;
+      const auto ko = key_of(p, o);
+      if (!std::binary_search(ring1.begin(), ring1.end(), ko)) ring2.push_back(ko);
+    }
+  }
+  sort_unique(ring2);
+  std::vector<std::uint64_t> all(ring1.size() + ring2.size());
+  std::merge(ring1.begin(), ring1.end(), ring2.begin(), ring2.end(), all.begin());
+  return all;
+}
+
+}  // namespace
+
 PartitionQuality partition_quality(const BlockGraph& g, const std::vector<std::int32_t>& part, int parts,
                                    const std::vector<std::int32_t>& together) {
   PartitionQuality q;
   q.parts = parts;
   const std::size_t n = g.n();
-  std::vector<double> weight(parts, 0.0), state(parts, 0.0), forces(parts, 0.0);
+  std::vector<double> weight(parts, 0.0), stepped(parts, 0.0), bytes(parts, 0.0);
   std::vector<std::int64_t> blocks(parts, 0), ghosts(parts, 0);
-  std::vector<int> neighbours(parts, 0);
   std::int64_t edges = 0;
-  // ghost blocks: counted once per (part, block) with a stamp per block
-  std::vector<std::int32_t> stamp(n, -1);
-  // neighbours: one stamp per (part, part)
-  std::vector<std::vector<std::int32_t>> seen(parts);
-  const double state_bytes = 6.0 * 8 * g.nodes_per_block;  // x and v of a ghost block's nodes
-  const double force_bytes = 3.0 * 8 * g.points_per_iface;  // an owned cut interface's forces
-  // order the blocks by part so that each part's ghosts are stamped in one pass
-  std::vector<std::int32_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) { return part[a] < part[b]; });
-  for (std::int32_t b : order) {
+  double wsum = 0;
+  for (std::size_t b = 0; b < n; ++b) {
     const int p = part[b];
-    weight[p] += g.vwgt.empty() ? 1.0 : g.vwgt[b];
+    const double w = g.vwgt.empty() ? 1.0 : g.vwgt[b];
+    weight[p] += w;
+    wsum += w;
     ++blocks[p];
     for (auto k = g.xadj[b]; k < g.xadj[b + 1]; ++k) {
-      const auto o = g.adjncy[k];
-      if (o > b) ++edges;
-      const int po = part[o];
-      if (po == p) continue;
-      if (o > b) ++q.edge_cut;
-      if (stamp[o] != p) {  // o is a ghost of p
-        stamp[o] = p;
-        ++ghosts[p];
-        state[p] += state_bytes;  // received
-      }
-      // a cut interface's owner (the part of its lower block) sends its forces, the other
-      // part receives them: force_bytes for either
-      forces[p] += force_bytes;
-      auto& s = seen[p];
-      if (std::find(s.begin(), s.end(), po) == s.end()) s.push_back(po);
+      const auto o = static_cast<std::size_t>(g.adjncy[k]);
+      if (o <= b) continue;
+      ++edges;
+      if (part[o] != p) ++q.edge_cut;
     }
   }
-  double wsum = 0;
-  for (double w : weight) wsum += w;
+  stepped = weight;
+  std::vector<std::uint64_t> peers;  // (part, neighbour), both ways
+  if (parts > 1) {
+    if (g.bv_offset.size() != n + 1) throw std::invalid_argument("partition_quality: the graph has no block vertices");
+    for (const auto k : halo_ghosts(g, part)) {
+      const auto p = key_part(k), b = key_block(k);
+      const auto owner = part[static_cast<std::size_t>(b)];
+      ++ghosts[p];
+      stepped[p] += g.vwgt.empty() ? 1.0 : g.vwgt[b];
+      // x and v of each of its nodes (a node per vertex): received by p, sent by its owner
+      const double state = 6.0 * 8 * static_cast<double>(g.bv_offset[b + 1] - g.bv_offset[b]);
+      bytes[p] += state;
+      bytes[owner] += state;
+      peers.push_back(key_of(p, owner));
+      peers.push_back(key_of(owner, p));
+    }
+    sort_unique(peers);
+  }
   const double wmean = wsum / parts;
   q.imbalance = wmean > 0 ? *std::max_element(weight.begin(), weight.end()) / wmean : 1.0;
   q.edge_cut_share = edges > 0 ? static_cast<double>(q.edge_cut) / edges : 0.0;
   q.blocks_min = *std::min_element(blocks.begin(), blocks.end());
   q.blocks_max = *std::max_element(blocks.begin(), blocks.end());
+  std::vector<int> neighbours(parts, 0);
+  for (auto k : peers) ++neighbours[key_part(k)];
+  double stepped_sum = 0;
   for (int p = 0; p < parts; ++p) {
-    neighbours[p] = static_cast<int>(seen[p].size());
-    // the ghost state is sent too: a part sends its own blocks that are ghosts elsewhere, about
-    // as many bytes as it receives (symmetric layers), so twice what it receives
-    const double bytes = 2 * state[p] + forces[p];
     q.ghosts_max = std::max(q.ghosts_max, ghosts[p]);
     q.ghosts_mean += static_cast<double>(ghosts[p]) / parts;
+    q.stepped_max = std::max(q.stepped_max, stepped[p]);
+    stepped_sum += stepped[p];
     q.neighbours_max = std::max(q.neighbours_max, neighbours[p]);
     q.neighbours_mean += static_cast<double>(neighbours[p]) / parts;
-    q.bytes_max = std::max(q.bytes_max, bytes);
-    q.bytes_mean += bytes / parts;
-    q.messages_max = std::max(q.messages_max, 4.0 * neighbours[p]);
+    q.bytes_max = std::max(q.bytes_max, bytes[p]);
+    q.bytes_mean += bytes[p] / parts;
+    q.messages_max = std::max(q.messages_max, 2.0 * neighbours[p]);  // one Isend + one Irecv each
   }
+  q.stepped_share = wsum > 0 ? stepped_sum / wsum : 1.0;
   if (!together.empty()) {
     std::vector<std::int32_t> first_part;
     std::vector<std::uint8_t> split;
@@ -241,20 +307,19 @@ PartitionQuality partition_quality(const BlockGraph& g, const std::vector<std::i
   return q;
 }
 
-Projection project(const BlockGraph& g, const std::vector<std::int32_t>& part,
-                   const PartitionQuality& q, double seconds_per_unit, const Network& net) {
+Projection project(const BlockGraph& g, const PartitionQuality& q, double seconds_per_unit,
+                   const Network& net, const StepSums& sums) {
   Projection pr;
   double total = 0;
-  std::vector<double> weight(q.parts, 0.0);
-  for (std::size_t b = 0; b < g.n(); ++b) {
-    const double w = g.vwgt.empty() ? 1.0 : g.vwgt[b];
-    total += w;
-    weight[part[b]] += w;
-  }
-  pr.compute_s = *std::max_element(weight.begin(), weight.end()) * seconds_per_unit;
-  pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth;
+  for (std::size_t b = 0; b < g.n(); ++b) total += g.vwgt.empty() ? 1.0 : g.vwgt[b];
+  const double add_s = sums.terms * sums.seconds_per_term;
+  const double stages = q.parts > 1 ? std::ceil(std::log2(static_cast<double>(q.parts))) : 0.0;
+  const double gather_s = q.parts > 1 ? 2 * stages * net.latency + 8 * sums.terms / net.bandwidth : 0.0;
+  pr.sums_s = add_s + gather_s;
+  pr.compute_s = q.stepped_max * seconds_per_unit + add_s;
+  pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth + gather_s;
   pr.ratio = pr.comm_s > 0 ? pr.compute_s / pr.comm_s : 0.0;
-  const double ideal = total * seconds_per_unit / q.parts;
+  const double ideal = (total * seconds_per_unit + add_s) / q.parts;
   pr.efficiency = ideal / (pr.compute_s + pr.comm_s);
   return pr;
 }

@@ -6,11 +6,13 @@
 // (the data an owner sends across per step); blocks that one charge binds get a heavy edge
 // between them, so that a cut through a charge is avoided where the balance allows it.
 //
-// The exchange model (partition_quality): each part keeps one layer of ghost blocks (the blocks
-// of other parts that share an interface with one of its own). Per step a part receives its
-// ghost blocks' node positions and velocities (6 doubles per node), and for every cut interface
-// it owns it sends the spring forces of its points to the other side (3 doubles per point);
-// each neighbouring part is one message each way per exchange, two exchanges per step.
+// The exchange model (partition_quality) is the halo stage's (parallel/halo.hpp), as built: each
+// part steps its own blocks and a ghost zone of two rings (ring 1: every block sharing a mesh
+// vertex with an own block; ring 2: their face neighbours). Per step a part receives its ghost
+// blocks' node positions and velocities (6 doubles per node) from their owners and sends as much
+// for its own blocks that are ghosts elsewhere: one message each way per neighbouring part. Every
+// rank also joins two collectives per step (the step's ordered sums, gathered whole, and the stop
+// signal).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -24,7 +26,9 @@ namespace cdem {
 // CSR graph in METIS's layout (xadj has n + 1 entries).
 struct BlockGraph {
   std::vector<std::int32_t> xadj, adjncy, vwgt, adjwgt;
-  int nodes_per_block = 4;   // for the exchange model (the most common element's)
+  // each block's mesh vertices (CSR; a CDEM block has a node per vertex): the halo's vertex ring
+  std::vector<std::int64_t> bv_offset;
+  std::vector<std::int32_t> bv;
   int points_per_iface = 3;  // spring points per interface: 2 in 2D, 3 in 3D
   std::size_t n() const { return xadj.empty() ? 0 : xadj.size() - 1; }
 };
@@ -73,14 +77,19 @@ struct PartitionQuality {
   double edge_cut_share = 0;        // of all interfaces
   double imbalance = 0;             // max part weight / mean part weight
   std::int64_t blocks_min = 0, blocks_max = 0;
+  // The halo stage's ghost zone (two rings, halo.hpp) and exchange, per part: its ghost blocks,
+  // the weight it steps (own + ghosts), its neighbours, the bytes it receives + sends per step.
   std::int64_t ghosts_max = 0;      // ghost blocks of the part with the most
   double ghosts_mean = 0;
+  double stepped_max = 0;           // weight stepped (own + ghost blocks) by the busiest part
+  double stepped_share = 0;         // sum over the parts of the weight stepped / the model's
   int neighbours_max = 0;           // parts a part exchanges with
   double neighbours_mean = 0;
   double bytes_max = 0, bytes_mean = 0;  // bytes received + sent per part per step
-  double messages_max = 0;               // messages per part per step (both ways, 2 exchanges)
+  double messages_max = 0;               // point-to-point messages per part per step (both ways)
   std::int64_t together_split = 0;  // groups of `together` blocks spread over more than 1 part
 };
+// Needs g.bv (the vertex ring) when parts > 1; throws std::invalid_argument without it.
 PartitionQuality partition_quality(const BlockGraph& g, const std::vector<std::int32_t>& part, int parts,
                                    const std::vector<std::int32_t>& together = {});
 
@@ -89,13 +98,23 @@ struct Network {
   double latency = 2e-6;
   double bandwidth = 100e9 / 8;  // 100 Gb/s
 };
-// Per step of the part with the most work: compute = its weight x (seconds per weight unit);
-// communication = its messages x latency + its bytes / bandwidth; efficiency without overlap
-// = compute(1 part) / parts / (compute + communication).
+// Per step of the busiest part (parallel/halo.hpp, as built; docs/parallel.md):
+//   compute = its stepped weight (own + ghost blocks) x (seconds per weight unit)
+//             + the whole model's sum terms x seconds per term (every rank adds them all, in order);
+//   comm    = its messages x latency + its bytes / bandwidth
+//             + 2 collectives x ceil(log2 parts) x latency + the sum terms' bytes / bandwidth
+//               (the terms are gathered whole by every rank);
+// efficiency without overlap = compute(1 process) / parts / (compute + comm), where one process
+// steps the model's weight and adds the same terms.
+struct StepSums {
+  double terms = 0;                // doubles gathered per step over the whole model (part_sums)
+  double seconds_per_term = 1e-9;  // to add one of them (a fused multiply-add chain)
+};
 struct Projection {
   double compute_s = 0, comm_s = 0, ratio = 0, efficiency = 0;
+  double sums_s = 0;  // of compute_s + comm_s: the gathered sums (their bytes, collectives, adds)
 };
-Projection project(const BlockGraph& g, const std::vector<std::int32_t>& part,
-                   const PartitionQuality& q, double seconds_per_unit, const Network& net);
+Projection project(const BlockGraph& g, const PartitionQuality& q, double seconds_per_unit,
+                   const Network& net, const StepSums& sums = {});
 
 }  // namespace cdem

@@ -1,14 +1,17 @@
 // `cdemblast bench --partition`: the scale projection of issue 17 (docs/parallel.md). The bench
 // box is generated at each size as a mesh, its block graph built from the shared faces (no
 // model: a 10M-block model would not fit this machine's memory), partitioned by METIS, and each
-// partition's exchange projected onto a network from the cost per block-step measured here.
+// partition's halo stage (its two ghost rings, its exchange, the step's sums gathered whole)
+// projected onto a network from the cost per block-step measured here.
 #include <fmt/format.h>
 #include <omp.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <numeric>
 #include <string>
 
+#include "cdem/mesh/topology.hpp"
 #include "cdem/parallel/partition.hpp"
 #include "cdem/solver/bench.hpp"
 #include "cdem/solver/run.hpp"
@@ -37,6 +40,50 @@ double measure_step_ns() {
   return best / (100.0 * static_cast<double>(pc.sim.model().n_blocks())) * 1e9;
 }
 
+// The doubles the halo stage gathers whole each step for the bench box's case (part_sums,
+// solver/simulation_halo.cpp): tied mode, its bottom fixed (a constrained vertex: its place and
+// two reaction terms) and its four sides non-reflecting (a node of a block with a face on them:
+// its place and four work terms; all counted, as once the waves have reached the sides).
+double bench_sum_terms(const Mesh& mesh) {
+  std::vector<std::int32_t> identity(mesh.num_elements());
+  std::iota(identity.begin(), identity.end(), 0);
+  std::vector<FaceRec> faces = sorted_faces(mesh, identity);
+  std::vector<FaceRec> boundary;  // faces of one element, by key
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    if (i + 1 < faces.size() && faces[i].key == faces[i + 1].key) {
+      ++i;
+      continue;
+    }
+    boundary.push_back(faces[i]);
+  }
+  std::vector<FaceRec>().swap(faces);
+  std::vector<std::uint64_t> nodes;  // (element, vertex)
+  std::vector<std::int32_t> fixed;   // vertices
+  for (const auto& set : mesh.face_sets) {
+    const bool bottom = set.name == "bottom";
+    for (const auto& f : set.facets) {
+      const int nf = f.count();
+      if (bottom) {
+        fixed.insert(fixed.end(), f.v.begin(), f.v.begin() + nf);
+        continue;
+      }
+      FaceRec r{{-1, -1, -1}, 0, 0};
+      std::copy(f.v.begin(), f.v.begin() + nf, r.key.begin());
+      std::sort(r.key.begin(), r.key.begin() + nf);
+      const auto it = std::lower_bound(boundary.begin(), boundary.end(), r,
+                                       [](const FaceRec& a, const FaceRec& b) { return a.key < b.key; });
+      if (it == boundary.end() || it->key != r.key) continue;
+      for (int k = 0; k < nf; ++k)
+        nodes.push_back((static_cast<std::uint64_t>(it->block) << 32) | static_cast<std::uint32_t>(f.v[k]));
+    }
+  }
+  std::sort(nodes.begin(), nodes.end());
+  std::sort(fixed.begin(), fixed.end());
+  const auto n_nodes = std::unique(nodes.begin(), nodes.end()) - nodes.begin();
+  const auto n_fixed = std::unique(fixed.begin(), fixed.end()) - fixed.begin();
+  return 5.0 * static_cast<double>(n_nodes) + 3.0 * static_cast<double>(n_fixed);
+}
+
 }  // namespace
 
 int run_partition_projection(const BenchOptions& opt) {
@@ -54,9 +101,10 @@ int run_partition_projection(const BenchOptions& opt) {
                                  step_ns, net.latency, net.bandwidth);
   if (!opt.json)
     std::printf("cost per block-step on one core: %.1f ns (%s); network: %.0f Gb/s, %.1f us per "
-                "message; no overlap of communication and computation\n",
+                "message; no overlap of communication and computation; the step's sums: %.1f ns per "
+                "term added\n",
                 step_ns, opt.step_ns > 0 ? "given" : "measured on the 30k box, 1 thread",
-                net.bandwidth * 8 / 1e9, net.latency * 1e6);
+                net.bandwidth * 8 / 1e9, net.latency * 1e6, StepSums{}.seconds_per_term * 1e9);
   for (std::size_t si = 0; si < sizes.size(); ++si) {
     const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, sizes[si]));
     double t0 = omp_get_wtime();
@@ -65,6 +113,8 @@ int run_partition_projection(const BenchOptions& opt) {
     t0 = omp_get_wtime();
     const BlockGraph g = mesh_block_graph(mesh);
     const double graph_s = omp_get_wtime() - t0;
+    StepSums sums;
+    sums.terms = bench_sum_terms(mesh);
     Mesh().vertices.swap(mesh.vertices);
     mesh = Mesh();
     double wsum = 0;
@@ -72,37 +122,38 @@ int run_partition_projection(const BenchOptions& opt) {
     const double s_per_unit = step_ns * 1e-9 * static_cast<double>(g.n()) / wsum;
     if (!opt.json)
       std::printf("\nbench box %d x %d x %d cubes: %zu blocks, %zu interfaces; mesh %.2f s, graph "
-                  "%.2f s\n"
-                  "parts  METIS s  blocks/part  imbalance  cut %%  ghosts/part (mean, max)  "
-                  "neighbours (mean, max)  kB/step/part (mean, max)  compute us  comm us  "
+                  "%.2f s; the step's sums gathered whole: %.0f doubles\n"
+                  "parts  METIS s  blocks/part  imbalance  cut %%  ghosts/part (mean, max)  stepped/model  "
+                  "neighbours (mean, max)  kB/step/part (mean, max)  compute us  comm us  sums us  "
                   "compute/comm  efficiency\n",
-                  cells[0], cells[1], cells[2], g.n(), g.adjncy.size() / 2, mesh_s, graph_s);
+                  cells[0], cells[1], cells[2], g.n(), g.adjncy.size() / 2, mesh_s, graph_s, sums.terms);
     json += fmt::format("{}{{\"blocks\": {}, \"interfaces\": {}, \"mesh_s\": {:.4g}, \"graph_s\": "
-                        "{:.4g}, \"partitions\": [",
-                        si ? ", " : "", g.n(), g.adjncy.size() / 2, mesh_s, graph_s);
+                        "{:.4g}, \"sum_terms\": {}, \"partitions\": [",
+                        si ? ", " : "", g.n(), g.adjncy.size() / 2, mesh_s, graph_s, sums.terms);
     for (std::size_t pi = 0; pi < opt.partition_parts.size(); ++pi) {
       const int parts = opt.partition_parts[pi];
       t0 = omp_get_wtime();
       const auto part = partition_kway(g, parts);
       const double metis_s = omp_get_wtime() - t0;
       const auto q = partition_quality(g, part, parts);
-      const auto pr = project(g, part, q, s_per_unit, net);
+      const auto pr = project(g, q, s_per_unit, net, sums);
       if (!opt.json)
-        std::printf("%5d  %7.1f  %11.0f  %9.3f  %5.2f  %10.0f %9lld  %8.1f %7d  %12.0f %9.0f  %10.1f "
-                    "%8.1f  %12.1f  %9.3f\n",
+        std::printf("%5d  %7.1f  %11.0f  %9.3f  %5.2f  %10.0f %9lld  %13.3f  %8.1f %7d  %12.0f %9.0f  "
+                    "%10.1f %8.1f %7.1f  %12.1f  %9.3f\n",
                     parts, metis_s, static_cast<double>(g.n()) / parts, q.imbalance,
                     100 * q.edge_cut_share, q.ghosts_mean, static_cast<long long>(q.ghosts_max),
-                    q.neighbours_mean, q.neighbours_max, q.bytes_mean / 1e3, q.bytes_max / 1e3,
-                    pr.compute_s * 1e6, pr.comm_s * 1e6, pr.ratio, pr.efficiency);
+                    q.stepped_share, q.neighbours_mean, q.neighbours_max, q.bytes_mean / 1e3,
+                    q.bytes_max / 1e3, pr.compute_s * 1e6, pr.comm_s * 1e6, pr.sums_s * 1e6, pr.ratio,
+                    pr.efficiency);
       json += fmt::format(
           "{}{{\"parts\": {}, \"metis_s\": {:.4g}, \"imbalance\": {:.5g}, \"edge_cut\": {}, "
           "\"edge_cut_share\": {:.5g}, \"ghosts_mean\": {:.5g}, \"ghosts_max\": {}, "
           "\"neighbours_mean\": {:.4g}, \"neighbours_max\": {}, \"bytes_mean\": {:.5g}, "
-          "\"bytes_max\": {:.5g}, \"compute_s\": {:.5g}, \"comm_s\": {:.5g}, \"ratio\": {:.5g}, "
-          "\"efficiency\": {:.5g}}}",
+          "\"bytes_max\": {:.5g}, \"stepped_share\": {:.5g}, \"stepped_max\": {:.5g}, \"compute_s\": {:.5g}, "
+          "\"comm_s\": {:.5g}, \"sums_s\": {:.5g}, \"ratio\": {:.5g}, \"efficiency\": {:.5g}}}",
           pi ? ", " : "", parts, metis_s, q.imbalance, q.edge_cut, q.edge_cut_share, q.ghosts_mean,
-          q.ghosts_max, q.neighbours_mean, q.neighbours_max, q.bytes_mean, q.bytes_max, pr.compute_s,
-          pr.comm_s, pr.ratio, pr.efficiency);
+          q.ghosts_max, q.neighbours_mean, q.neighbours_max, q.bytes_mean, q.bytes_max, q.stepped_share,
+          q.stepped_max, pr.compute_s, pr.comm_s, pr.sums_s, pr.ratio, pr.efficiency);
       std::fflush(stdout);
     }
     json += "]}";

@@ -106,11 +106,12 @@ done
 same "$TMP/3d_c" "$TMP/3d_r"
 echo "restart: written by 2 ranks, continued on 3: identical to 1 rank uninterrupted"
 
-# The halo stage (parallel/halo.hpp): a case without charges or contact is stepped
+# The halo stage (parallel/halo.hpp): a case without contact or solid charges is stepped
 # by parts, each rank its own and a ghost zone, the ghosts' motion received from their owners.
-# The 2D plate with a pressurised hole (tied, and the springs mode) and a 3D box with a
-# pressurised blind hole and a fixed base (tied: constrained clusters, reactions), and a 3D
-# cylinder with a damping zone.
+# The 2D plate with a pressurised hole (tied, and the springs mode), a 3D box with a
+# pressurised blind hole and a fixed base (tied: constrained clusters, reactions), a 3D
+# cylinder with a damping zone, and a 3D box with a bar charge along its axis, across the parts
+# (its state stepped on every rank, solver/halo_charges.hpp; its gas fills cracks between parts).
 # mode DIR: the summary's ranks_mode
 mode() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))['ranks_mode'])" "$1/summary.json"; }
 P2=("$ROOT/examples/plate_with_hole_2d/case.toml" --set mesh.generate.element_size=0.1
@@ -118,7 +119,8 @@ P2=("$ROOT/examples/plate_with_hole_2d/case.toml" --set mesh.generate.element_si
 H3=("$ROOT/tests/verification/cases/hole_box_3d.toml")
 # a cylinder with an absorbing ring (a damping zone graded over the whole ring) and a pressurised hole
 R3=("$ROOT/tests/verification/cases/ring_cylinder_3d.toml")
-for c in P2 H3 R3; do
+B3=("$ROOT/tests/verification/cases/bar_box_3d.toml")
+for c in P2 H3 R3 B3; do
   declare -n args=$c
   for n in 1 2 3 4; do
     run "$n" "$TMP/h_${c}_$n" "${args[@]}" 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "$c on $n ranks"; }
@@ -130,7 +132,7 @@ for c in P2 H3 R3; do
   unset -n args
 done
 # the springs mode (the 3D box: with velocity constraints at its base, their reactions' work)
-for c in P2 H3; do
+for c in P2 H3 B3; do
   declare -n args=$c
   for n in 1 3; do
     run "$n" "$TMP/h_${c}s_$n" "${args[@]}" --set 'simulation.interfaces="springs"' 2> "$TMP/log_h" ||
@@ -167,9 +169,10 @@ EOF
 [ ! -e "$TMP/h_H3_1/partition.vtu" ] || fail "one process wrote a partition.vtu"
 # check --parts says which stage a run on that many ranks takes, and why not the halo stage
 "$BIN" check "${H3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the 3D box's stage"
-"$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step charges" ||
-  fail "check --parts: the bar case's stage"
-echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3) on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
+"$BIN" check "${B3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the bar box's stage"
+"$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
+  fail "check --parts: the 2D bar case's stage (contact)"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets
@@ -184,5 +187,7 @@ expect_refused() {
 expect_refused "a missing case" "cannot open case file" run "$TMP/missing.toml" -o "$TMP/x" -q
 expect_refused "an occupied run directory" "holds the results of another run" run "${C2[@]}" -o "$TMP/2d_1" -q
 expect_refused "report on ranks" "only run, resume and check" report "$TMP/2d_1"
-expect_refused "the halo stage of a case with charges" "the halo stage does not step charges" run "${C2[@]}" -o "$TMP/h_x" -q --ranks-mode halo
+expect_refused "the halo stage of a case with contact" "the halo stage does not step general contact" run "${C2[@]}" -o "$TMP/h_x" -q --ranks-mode halo
+expect_refused "the halo stage of a solid charge" "the halo stage does not step solid charges" run "$ROOT/examples/single_hole_2d/solid.toml" \
+  --set contact.enabled=false -o "$TMP/h_y" -q --ranks-mode halo
 echo "errors on 2 ranks: exit 2 with the message, no hang"

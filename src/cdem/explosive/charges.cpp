@@ -71,10 +71,10 @@ std::int32_t eos_index(std::vector<Eos>& table, std::vector<std::string>& names,
 
 }  // namespace
 
-void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
+int inflation_forces(const Model& m, std::int32_t b, double p, Vec3 fn[4]) {
   const auto n0 = m.block_first_node[b];
   const LocalFaces lf = local_faces(m.block_type[b]);
-  Vec3 fn[4] = {};
+  for (int i = 0; i < 4; ++i) fn[i] = Vec3{};
   for (int k = 0; k < lf.count; ++k) {
     Vec3 q[3];
     for (int i = 0; i < lf.nodes_per_face; ++i) q[i] = m.x[n0 + lf.f[k][i]];
@@ -82,7 +82,13 @@ void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
     const Vec3 share = (p / lf.nodes_per_face) * a;
     for (int i = 0; i < lf.nodes_per_face; ++i) fn[lf.f[k][i]] += share;
   }
-  const int nn = nodes_of(m.block_type[b]);
+  return nodes_of(m.block_type[b]);
+}
+
+void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out) {
+  Vec3 fn[4];
+  const int nn = inflation_forces(m, b, p, fn);
+  const auto n0 = m.block_first_node[b];
   for (int i = 0; i < nn; ++i) out.add(m, n0 + i, fn[i]);
 }
 
@@ -361,6 +367,12 @@ std::string describe_bar_binding(const BarCharges& bc) {
 }
 
 void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
+  bar_state(m, bc, m.vol_ratio, t);
+  bar_apply(m, bc, out);
+}
+
+void bar_state(const Model& m, BarCharges& bc, std::span<const double> vol_ratio, double t,
+               const CrackInputs* given) {
   const std::size_t ns = bc.n_segments();
   for (std::size_t j = 0; j < ns; ++j) {
     const auto& bar = bc.bars[bc.seg_bar[j]];
@@ -369,7 +381,7 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
     if (bar.gas != GasModel::Literal) continue;  // the deck's gas body (gas.hpp)
     double theta = 0;
     const auto e0 = bc.seg_elem_offset[j], e1 = bc.seg_elem_offset[j + 1];
-    for (auto e = e0; e < e1; ++e) theta += m.vol_ratio[bc.seg_elem[e]] - 1.0;
+    for (auto e = e0; e < e1; ++e) theta += vol_ratio[bc.seg_elem[e]] - 1.0;
     const double v = 1.0 + theta / (e1 - e0);                               // eq. 9
     bc.seg_v[j] = v;
     bc.seg_p[j] = xi > 0 ? xi * eos_pressure(bc.eos[bar.eos], v) : 0.0;     // eq. 10, 11
@@ -386,7 +398,7 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
       for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e) all += bc.elem_bar_vch[e];
       if (!(all > 0)) continue;
       // (a collapsed or inverted block holds no gas: J taken as 0 at most)
-      const double dv = (std::max(m.vol_ratio[b], 0.0) - 1.0) * m.block_volume0[b];
+      const double dv = (std::max(vol_ratio[b], 0.0) - 1.0) * m.block_volume0[b];
       for (auto e = bc.elem_bar_offset[i]; e < bc.elem_bar_offset[i + 1]; ++e) {
         const auto k = bc.elem_bar[e];
         if (bc.bars[k].gas == GasModel::Literal) continue;
@@ -400,7 +412,7 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
         bc.gas.cavity[k] += xi * (vch + dv * vch / all);
       }
     }
-    update_gas(m, bc.gas, bc.eos, out, bc.t_last >= 0 ? t - bc.t_last : 0.0);
+    gas_state(m, bc.gas, bc.eos, bc.t_last >= 0 ? t - bc.t_last : 0.0, given);
     for (std::size_t k = 0; k < bc.bars.size(); ++k) {
       const auto& bar = bc.bars[k];
       if (bar.gas == GasModel::Literal) continue;
@@ -418,6 +430,13 @@ void bar_loads(Model& m, BarCharges& bc, AppliedLoads& out, double t) {
     for (auto s = s0; s < s1; ++s) pbar += bc.seg_p[bc.elem_seg[s]];
     pbar /= (s1 - s0);                                                      // eq. 14
     bc.elem_sigma[i] = pbar * bc.elem_atten[i];                             // eq. 15
+  }
+}
+
+void bar_apply(Model& m, BarCharges& bc, AppliedLoads& out) {
+  // the gas-filled cracks' faces first, then the bound blocks (each node's forces in that order)
+  if (bc.gas.any()) gas_face_loads(m, bc.gas, out);
+  for (std::size_t i = 0; i < bc.elem_block.size(); ++i) {
     if (bc.elem_sigma[i] > 0) {
       const auto b = bc.elem_block[i];
       inflate_block(m, b, bc.elem_sigma[i], out);                           // eq. 16

@@ -21,6 +21,7 @@
 // inverts) is reported once and stops carrying pressure.
 #pragma once
 #include <cstdio>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -88,8 +89,16 @@ double make_charge_cavities(Model& m, BarCharges& bars);
 // charge fractions and attenuation factors.
 std::string describe_bar_binding(const BarCharges& bars);
 
-// Loads the rock at time t (adds to m.f through `out`).
+// Loads the rock at time t (adds to m.f through `out`): bar_state, then bar_apply.
 void bar_loads(Model& m, BarCharges& bars, AppliedLoads& out, double t);
+// The bars' state at time t (segments, gas bodies, each bound block's pressure elem_sigma) from
+// the bound blocks' volume ratios `vol_ratio` (per block of m). With `given` the gas's crack list
+// is the one given (gas_state), and m's state is not read, only its topology and sizes.
+void bar_state(const Model& m, BarCharges& bars, std::span<const double> vol_ratio, double t,
+               const CrackInputs* given = nullptr);
+// The loads of that state: the gas-filled cracks' faces, then each bound block inflated by its
+// pressure (eq. 16), and its stress the total stress (through `out`).
+void bar_apply(Model& m, BarCharges& bars, AppliedLoads& out);
 
 struct SolidCharges {
   struct Charge {
@@ -133,5 +142,7 @@ void write_charge_rows(std::FILE* f, double t, const BarCharges& bars, const Sol
 // Adds to the nodes of block b the forces of a uniform pressure p (Pa) on all its faces, in
 // the current geometry: F^N = p sum_k n^k dS^k / n_k (outward: inflates; net force zero).
 void inflate_block(Model& m, std::int32_t b, double p, AppliedLoads& out);
+// Those forces, per node of the block (returns its node count).
+int inflation_forces(const Model& m, std::int32_t b, double p, Vec3 fn[4]);
 
 }  // namespace cdem

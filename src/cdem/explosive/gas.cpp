@@ -7,6 +7,7 @@
 #include <cassert>
 #include <cmath>
 #include <exception>
+#include <stdexcept>
 
 #include "cdem/core/loop_split.hpp"
 #include "cdem/core/prefetch.hpp"
@@ -95,47 +96,59 @@ void seed_gas(const Model& m, GasField& g, std::int32_t b, std::int32_t k, bool 
   }
 }
 
+namespace {
+
+// The crack list of a step: the model's (tied mode its active interfaces, springs mode all), or
+// the one given (its interfaces ascending, with their open flags and apertures).
+struct ListView {
+  const Model& m;
+  const CrackInputs* given;
+  std::size_t size() const {
+    return given ? given->iface.size() : (m.tied ? m.active_ifaces.size() : m.n_ifaces());
+  }
+  std::size_t operator()(std::size_t k) const {
+    return given ? static_cast<std::size_t>(given->iface[k])
+                 : (m.tied ? static_cast<std::size_t>(m.active_ifaces[k]) : k);
+  }
+};
+
+// (the interface k entries ahead in the list: its points' nodes and normal; `loads`: the nodes'
+// velocities for the loads' power, else their positions for the apertures. The list is in
+// ascending order (order_active_ifaces), but sparse early in a blast and its nodes scattered.)
+void prefetch_ahead(const Model& m, const ListView& iface_at, std::int64_t k, bool loads) {
+  const int np = m.springs_per_iface;
+  const std::size_t i = iface_at(static_cast<std::size_t>(k));
+  prefetch_at(i, m.iface_normal.data());
+  if (!loads) prefetch_at(i * np, m.tied ? m.sp_tied.data() : m.sp_state.data());
+  for (int q = 0; q < np; ++q) {
+    const std::size_t s = i * np + q;
+    if (loads) {
+      prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.v.data());
+      prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.v.data());
+    } else {
+      prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.x.data());
+      prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.x.data());
+    }
+  }
+}
+
+}  // namespace
+
 void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads& out, double dt) {
+  if (!g.any()) return;
+  gas_state(m, g, eos, dt);
+  gas_face_loads(m, g, out);
+}
+
+void gas_state(const Model& m, GasField& g, const std::vector<Eos>& eos, double dt, const CrackInputs* given) {
   const std::size_t nb = g.bodies.size();
   if (!g.any()) return;
   g.scratch.assign(2 * nb, 0.0);  // per body: crack volume, crack vent area (no reallocation)
   const int np = m.springs_per_iface;
   const bool cracks = fills_cracks(g);
-  const std::size_t nlist = m.tied ? m.active_ifaces.size() : m.n_ifaces();
-  auto iface_at = [&](std::size_t k) {
-    return m.tied ? static_cast<std::size_t>(m.active_ifaces[k]) : k;
-  };
-  auto aperture = [&](std::size_t i) {
-    double w = 0;
-    const Vec3 n = m.iface_normal[i];
-    for (int q = 0; q < np; ++q) w += dot(m.x[m.sp_b[i * np + q]] - m.x[m.sp_a[i * np + q]], n);
-    return w / np;
-  };
-  auto open = [&](std::size_t i) {
-    for (int q = 0; q < np; ++q) {
-      const auto s = i * np + q;
-      if (m.tied ? m.sp_tied[s] != 0 : m.sp_state[s] == kIntact) return false;
-    }
-    return true;
-  };
-  // (the interface k entries ahead in the list: its points' nodes and normal; `loads`: the nodes'
-  // velocities for the loads' power, else their positions for the apertures. The list is in
-  // ascending order (order_active_ifaces), but sparse early in a blast and its nodes scattered.)
-  auto prefetch_ahead = [&](std::int64_t k, bool loads) {
-    const std::size_t i = iface_at(static_cast<std::size_t>(k));
-    prefetch_at(i, m.iface_normal.data());
-    if (!loads) prefetch_at(i * np, m.tied ? m.sp_tied.data() : m.sp_state.data());
-    for (int q = 0; q < np; ++q) {
-      const std::size_t s = i * np + q;
-      if (loads) {
-        prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.v.data());
-        prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.v.data());
-      } else {
-        prefetch_at(static_cast<std::size_t>(m.sp_b[s]), m.x.data());
-        prefetch_at(static_cast<std::size_t>(m.sp_a[s]), m.x.data());
-      }
-    }
-  };
+  const ListView iface_at{m, given};
+  const std::size_t nlist = iface_at.size();
+  g.given_list = given != nullptr;
   // 1. cracks: which listed interfaces are open, their apertures, fill, volume, vents (the gas
   // state of the last step sets the front speed, the choked flux per density of each body:
   // computed once per body, the same value for all its cracks)
@@ -198,16 +211,16 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
           prefetch_at(ia, m.iface_block_a.data(), m.iface_block_b.data(), g.iface_body.data(), m.sp_area.v.data());
           prefetch_for_write_at(ia, g.iface_fill.data());
         }
-        if (k + kPrefetchAhead < nl) {
-          prefetch_ahead(k + kPrefetchAhead, false);
+        if (k + kPrefetchAhead < nl && !given) {
+          prefetch_ahead(m, iface_at, k + kPrefetchAhead, false);
           const std::size_t ia = iface_at(static_cast<std::size_t>(k + kPrefetchAhead));
           for (const auto blk : {m.iface_block_a[ia], m.iface_block_b[ia]})
             prefetch_at(static_cast<std::size_t>(blk), g.block_exterior.data(), m.block_size.data());
         }
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
-        const bool is_open = open(i);
+        const bool is_open = given ? given->open[static_cast<std::size_t>(k)] != 0 : crack_open(m, i);
         g.list_open[k] = is_open;
-        g.list_aperture[k] = is_open ? aperture(i) : 0.0;
+        g.list_aperture[k] = is_open ? (given ? given->aperture[static_cast<std::size_t>(k)] : crack_aperture(m, i)) : 0.0;
         std::uint8_t st = kSkip;
         if (is_open) {
           const std::int32_t d = g.iface_body[i];
@@ -226,6 +239,8 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         g.list_state[k] = st;
       }
     });
+    g.reached_now.clear();
+    g.chain_overflow = -1;
     for (std::size_t k = 0; k < nlist; ++k) {
       std::uint8_t st = g.list_state[k];
       if (st == kSkip) continue;
@@ -240,13 +255,24 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
         g.iface_body[i] = d;
         st = advance_fill(i, d, ba, bb) ? kReached : kSkip;
         terms(i, ba, bb, k);
-        st |= kTerms;
+        st |= kTerms | kSerial;
       }
       if (st & kReached) {
         const std::size_t i = iface_at(k);
         const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
-        if (g.block_body[ba] < 0) g.block_body[ba] = d;
-        if (g.block_body[bb] < 0) g.block_body[bb] = d;
+        // (a given list: a crack that filled in the step its gas reached it, next to a block
+        // reached in this pass, puts the front further from the step's start than the list's
+        // rule sees: CrackInputs)
+        if (given && (st & kSerial)) {
+          const auto& r = g.reached_now;
+          if (std::find(r.begin(), r.end(), ba) != r.end() || std::find(r.begin(), r.end(), bb) != r.end())
+            g.chain_overflow = static_cast<std::int32_t>(i);
+        }
+        for (const auto blk : {ba, bb})
+          if (g.block_body[blk] < 0) {
+            g.block_body[blk] = d;
+            if (given) g.reached_now.push_back(blk);
+          }
       }
       if (st & kTerms) {
         g.scratch[2 * d] += g.list_fill_area[k] * w;
@@ -292,6 +318,15 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       gs.m_cracks = rho * gs.v_cracks;
     }
   }
+}
+
+void gas_face_loads(Model& m, GasField& g, AppliedLoads& out) {
+  if (!g.any()) return;
+  if (g.given_list) throw std::logic_error("gas_face_loads: the step's list was given (a part applies its own loads)");
+  const int np = m.springs_per_iface;
+  const bool cracks = fills_cracks(g);
+  const ListView iface_at{m, nullptr};
+  const std::size_t nlist = iface_at.size();
   // 3. the filled cracks' faces pushed apart by f P, in one parallel region: each thread forms
   // the pressures of its contiguous range of the list (into the apertures' array, no longer
   // needed) and counts its loads; their places in the record follow in list order (the threads'
@@ -342,7 +377,7 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
       std::int64_t r = g.thread_loads[static_cast<std::size_t>(part.thread)];
       for (std::int64_t k = part.lo; k < part.hi && !failed; ++k) {
         if (k + kPrefetchAhead < part.hi && g.list_aperture[k + kPrefetchAhead] > 0)
-          prefetch_ahead(k + kPrefetchAhead, true);
+          prefetch_ahead(m, iface_at, k + kPrefetchAhead, true);
         const double p = g.list_aperture[k];
         const std::size_t i = iface_at(static_cast<std::size_t>(k));
         g.iface_load[i] = p > 0 ? static_cast<std::int32_t>(r) : -1;
@@ -396,6 +431,22 @@ void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads
     });
     out.book_pair_power(static_cast<std::size_t>(nload), g.load_power.data());
   }
+}
+
+bool gas_candidate(const Model& m, const GasField& g, std::size_t i, bool open, double aperture) {
+  if (!open) return false;
+  if (g.iface_body[i] >= 0) return true;
+  if (!(aperture > 0)) return false;
+  for (const auto b : {m.iface_block_a[i], m.iface_block_b[i]}) {
+    if (g.block_body[b] >= 0) return true;
+    for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
+      const std::int32_t code = m.block_iface_list[e];
+      const auto f = static_cast<std::size_t>(block_iface_index(code));
+      const auto other = code > 0 ? m.iface_block_b[f] : m.iface_block_a[f];
+      if (g.iface_body[f] >= 0 || g.block_body[other] >= 0) return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace cdem

@@ -97,6 +97,11 @@ struct GasField {
   // per interface, this step: the index of its first crack-face load among them, -1 for none
   // (an interface off the list has none: in the tied mode the list only grows)
   std::vector<std::int32_t> iface_load;
+  // a step with a given crack list (gas_state): set; the blocks the pass reached, and the first
+  // interface whose front ran past what the list's rule covers (-1 none; CrackInputs)
+  bool given_list = false;
+  std::vector<std::int32_t> reached_now;
+  std::int32_t chain_overflow = -1;
   bool any() const {
     for (const auto& b : bodies)
       if (b.model != GasModel::Literal) return true;
@@ -129,6 +134,53 @@ bool advance_plug(double& x, double& v, double p, double a, double c, double len
 // One step of every body whose model is cavity or cracks, from the burnt volume and cavity the
 // charge model has put in g.burnt_volume and g.cavity: mass, volume, pressure, venting, plug, the
 // gas-filled cracks and their loads (added through `out`). dt: the time since the last call.
+// It is gas_state, then gas_face_loads.
 void update_gas(Model& m, GasField& g, const std::vector<Eos>& eos, AppliedLoads& out, double dt);
+
+// An interface of the crack list is open when none of its points is tied (tied mode) or intact
+// (springs mode); its aperture is its points' mean normal opening (m).
+inline bool crack_open(const Model& m, std::size_t i) {
+  const int np = m.springs_per_iface;
+  for (int q = 0; q < np; ++q) {
+    const auto s = i * np + q;
+    if (m.tied ? m.sp_tied[s] != 0 : m.sp_state[s] == kIntact) return false;
+  }
+  return true;
+}
+inline double crack_aperture(const Model& m, std::size_t i) {
+  const int np = m.springs_per_iface;
+  double w = 0;
+  const Vec3 n = m.iface_normal[i];
+  for (int q = 0; q < np; ++q) w += dot(m.x[m.sp_b[i * np + q]] - m.x[m.sp_a[i * np + q]], n);
+  return w / np;
+}
+
+// The crack list of a step given from outside (a distributed run's halo stage, where no rank holds
+// every interface's state): its interfaces in ascending order, each with its open flag and
+// aperture as its owner formed them. It need not hold the whole list, only every interface the
+// pass would act on: every open one with a gas body, and every open one with a positive aperture
+// that could take a body in the pass. A crack takes its body from a block the gas has reached;
+// a block is reached in a pass when it has a body, or when a crack next to it with a body fills,
+// or (rarely: a crack that fills in the step its gas reached it) when a crack without a body
+// next to it fills from a block that has a body. So the rule is: an open crack with a body, or
+// with a positive aperture and a block that has a body, or that is next to a crack with a body,
+// or next to a block with one (gas_candidate). A front that goes further in one pass (a crack
+// filling in the step its gas reached it, from a block reached in that pass) is reported in
+// GasField::chain_overflow.
+struct CrackInputs {
+  std::vector<std::int32_t> iface;
+  std::vector<std::uint8_t> open;
+  std::vector<double> aperture;
+};
+// The rule above, for interface i of a model whose gas state `g` is (whole-model indices).
+bool gas_candidate(const Model& m, const GasField& g, std::size_t i, bool open, double aperture);
+
+// The state half of update_gas (the bodies, the crack fronts; no loads). With `given`, the crack
+// list is the one given, and m's state (positions, ties) is not read: only its topology and sizes.
+void gas_state(const Model& m, GasField& g, const std::vector<Eos>& eos, double dt,
+               const CrackInputs* given = nullptr);
+// The loads half: the filled cracks' faces pushed apart by f P (through `out`), over the list
+// that gas_state used (not a given one).
+void gas_face_loads(Model& m, GasField& g, AppliedLoads& out);
 
 }  // namespace cdem

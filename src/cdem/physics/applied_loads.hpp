@@ -25,6 +25,7 @@ struct AppliedLoads {
     pair_a.clear();
     pair_force.clear();
     power_old = 0;
+    owned.clear();
   }
   // Adds f to node n of the model and records it.
   void add(Model& m, std::int32_t n, Vec3 f) {
@@ -52,6 +53,27 @@ struct AppliedLoads {
   // sum of f . v over the loads, with the model's velocities now (after the integration: v(n+1/2))
   double power_now(const Model& m);
   std::vector<double> terms;  // power_now's per-load terms (grown once)
+
+  // A part of a distributed run (the halo stage, solver/halo_charges.hpp) does not record its
+  // loads above: its step's load power is summed over the whole model's record, in that record's
+  // order (single loads, then pair loads, as power_now; power_old adds the pair loads first, as
+  // a one-process step books them first). It lists here the loads it owns: each one's place in
+  // the whole record, its nodes (a < 0: a single load on b), its force and its term with
+  // v(n-1/2); and the whole record's counts.
+  struct Owned {
+    std::vector<std::int64_t> at;
+    std::vector<std::int32_t> b, a;
+    std::vector<Vec3> f;
+    std::vector<double> old;
+    std::int64_t whole_single = 0, whole_pairs = 0;
+    void clear() {
+      at.clear(), b.clear(), a.clear(), f.clear(), old.clear();
+      whole_single = whole_pairs = 0;
+    }
+    void add(std::int64_t place, std::int32_t nb, std::int32_t na, Vec3 force, double term) {
+      at.push_back(place), b.push_back(nb), a.push_back(na), f.push_back(force), old.push_back(term);
+    }
+  } owned;
 };
 
 }  // namespace cdem

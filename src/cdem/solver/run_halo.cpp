@@ -1,12 +1,14 @@
 // The halo stage's side of a run (run_halo.hpp): which cases it steps, and this rank's part.
 #include "cdem/solver/run_halo.hpp"
 
+#include "cdem/explosive/charges.hpp"
 #include "cdem/solver/run.hpp"
 
 namespace cdem {
 
 std::string halo_unsupported(const Case& c) {
-  if (!c.holes.empty()) return "charges (their bars, gas and explosive blocks span the parts)";
+  for (const auto& h : c.holes)
+    if (h.model == ChargeModel::Solid) return "solid charges (their explosive blocks and gas span the parts)";
   if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
   for (const auto& mt : c.materials) {
     if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
@@ -15,12 +17,19 @@ std::string halo_unsupported(const Case& c) {
   return "";
 }
 
-HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const RankInfo& rk) {
+HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, const RankInfo& rk) {
   const Model& m = whole.model();
   const BlockGraph g = block_graph(m);
   part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
   quality = partition_quality(g, part, rk.size, {});
-  PartModel pm = cut_part(build_case_model(c, mesh), part, rk.rank);
+  // (the model as prepare_case makes it before its Simulation: the bars' blocks changed by their
+  // charges, the same on every rank as on one process)
+  Model before = build_case_model(c, mesh);
+  if (!bars.empty()) {
+    BarCharges again = build_bar_charges(before, charge_spec(c));
+    make_charge_cavities(before, again);
+  }
+  PartModel pm = cut_part(before, part, rk.rank);
   own_blocks = pm.own_blocks;
   ghost_blocks = pm.ghost_blocks;
   exchange = std::make_unique<HaloExchange>(pm, part);
@@ -32,6 +41,10 @@ HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const
     for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
   sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
   sim->make_part(whole, pm, part);
+  if (!bars.empty()) {
+    charges = std::make_unique<HaloBars>(bars, m, pm, sim->model(), part, rk.rank);
+    sim->add_load([hb = charges.get()](Model& l, AppliedLoads& out, double t) { hb->load(l, out, t); });
+  }
   exchange->exchange(sim->model());  // (the set-up's cluster velocities of the ghosts)
   uplift = UpliftTracker(sim->model(), up_direction(m, c.analysis.up), 0);
 }

@@ -10,6 +10,7 @@
 #include "cdem/parallel/halo.hpp"
 #include "cdem/parallel/partition.hpp"
 #include "cdem/parallel/ranks.hpp"
+#include "cdem/solver/halo_charges.hpp"
 #include "cdem/solver/simulation.hpp"
 
 namespace cdem {
@@ -20,14 +21,16 @@ namespace cdem {
 struct HaloRun {
   std::unique_ptr<Simulation> sim;
   std::unique_ptr<HaloExchange> exchange;
+  std::unique_ptr<HaloBars> charges;  // the bars' state, stepped on every rank (halo_charges.hpp)
   UpliftTracker uplift{Model{}, Vec3{0, 0, 1}, 0};
   std::vector<std::int32_t> part;  // the rank stepping each block of the whole model
   PartitionQuality quality;
   std::size_t own_blocks = 0, ghost_blocks = 0;
 
   // METIS parts of `whole` (ranges of the block order without METIS), one per rank; this rank's
-  // cut from the case's model and set up.
-  HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, const RankInfo& rk);
+  // cut from the case's model and set up. `bars`: the whole model's bar charges, whose state every
+  // rank steps (kept by the caller).
+  HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, const RankInfo& rk);
   // One step of the part, then its ghosts' motion from their owners.
   void step(bool sample);
 };

@@ -328,9 +328,8 @@ void Simulation::step(bool sample) {
   }
   // 9. the works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt, and their parts after t_n
   // (energy() takes those back out, see last_*_)
-  const double power_new = applied_.power_now(m_);
-  const double step_explosive = 0.5 * dt_ * (applied_.power_old + power_new);
-  last_explosive_ = 0.5 * dt_ * power_new;
+  // (a part: the explosive loads' power over the whole model, part_sums)
+  double power_old = applied_.power_old, power_new = halo_ ? 0.0 : applied_.power_now(m_);
   if (beta_max_ > 0) {  // serial sums in a fixed order: the same for any thread count
     double at_old = 0, at_new = 0;
     for (double p : sd_power_) at_old += p;
@@ -341,7 +340,9 @@ void Simulation::step(bool sample) {
   double step_absorbed = 0, load_after = 0;
   step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
   // a part: these sums and the inverted blocks over the whole model
-  if (halo_) part_sums(step_boundary, step_absorbed, load_after, inv, first);
+  if (halo_) part_sums(step_boundary, step_absorbed, load_after, inv, first, power_old, power_new);
+  const double step_explosive = 0.5 * dt_ * (power_old + power_new);
+  last_explosive_ = 0.5 * dt_ * power_new;
   if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
   inverted_ = inv;
   last_boundary_ += load_after;

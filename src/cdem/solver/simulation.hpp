@@ -214,7 +214,7 @@ class Simulation {
   std::shared_ptr<const HaloGatherLists> gather_;
   // a part's step sums over the whole model (make_part)
   void part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
-                 std::int32_t& first);
+                 std::int32_t& first, double& power_old, double& power_new);
   // a part's inverted blocks: its own blocks' count and first (global) block
   void part_inverted(std::int64_t& inv, std::int32_t& first) const;
   std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)

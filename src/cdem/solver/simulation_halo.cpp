@@ -32,7 +32,7 @@ struct HaloIndex {
   std::vector<std::pair<std::int32_t, std::int32_t>> con;    // constrained vertices (tied), constraints (springs)
   std::size_t n_work = 0, n_con = 0;                         // the whole's counts
   // part_sums' buffers, grown in the first steps and kept (no allocation in a step after)
-  std::vector<double> mine, all, work_terms, con_terms;
+  std::vector<double> mine, all, work_terms, con_terms, x_old, x_new;
   std::vector<std::int64_t> at;
   std::vector<std::pair<std::int64_t, double>> ins;
 };
@@ -83,8 +83,8 @@ struct Get {
 
 void Simulation::make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part) {
   if (!loads_.empty() || beta_max_ > 0 || contact_.enabled || !rank_blocks_.empty())
-    throw std::logic_error("Simulation::make_part: the halo stage does not take charges, stiffness "
-                           "damping or contact yet");
+    throw std::logic_error("Simulation::make_part: a part takes its charges' load hook after this (HaloBars), "
+                           "and no stiffness damping or contact yet");
   auto h = std::make_shared<HaloIndex>();
   h->rank = ranks().rank;
   h->ranks = ranks().size;
@@ -179,10 +179,12 @@ void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
 
 // The step's sums over the whole model, in its order (step(), after load_work): see the top.
 void Simulation::part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
-                           std::int32_t& first) {
+                           std::int32_t& first, double& power_old, double& power_new) {
   HaloIndex& h = *halo_;
   std::vector<double>& mine = h.mine;
-  mine.assign({static_cast<double>(inv), static_cast<double>(first), 0.0, static_cast<double>(h.con.size()), 0.0});
+  const AppliedLoads::Owned& xo = applied_.owned;
+  mine.assign({static_cast<double>(inv), static_cast<double>(first), 0.0, static_cast<double>(h.con.size()), 0.0,
+               static_cast<double>(xo.at.size())});
   // (a node whose four terms are zero, most of a boundary at rest or only constrained, is left
   // out: adding a zero to the sums changes no bit, as they never hold -0; fma(+-0, dt, w) = w)
   std::size_t nwork = 0;
@@ -209,7 +211,18 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
     ++nins;
   }
   mine[4] = static_cast<double>(nins);
+  // the explosive loads this part owns: their places in the whole record, their power terms with
+  // v(n-1/2) and with v(n+1/2) (as power_now forms them)
+  for (std::size_t k = 0; k < xo.at.size(); ++k) {
+    const auto b = static_cast<std::size_t>(xo.b[k]);
+    const double now = xo.a[k] < 0 ? dot(xo.f[k], m_.v[b]) : dot(xo.f[k], m_.v[b] - m_.v[static_cast<std::size_t>(xo.a[k])]);
+    mine.insert(mine.end(), {static_cast<double>(xo.at[k]), xo.old[k], now});
+  }
   std::vector<double>&all = h.all, &work = h.work_terms, &con = h.con_terms;
+  std::vector<double>&x_old = h.x_old, &x_new = h.x_new;
+  const auto n_single = static_cast<std::size_t>(xo.whole_single), n_x = n_single + static_cast<std::size_t>(xo.whole_pairs);
+  x_old.assign(n_x, 0.0);
+  x_new.assign(n_x, 0.0);
   std::vector<std::pair<std::int64_t, double>>& ins = h.ins;
   gather_all(mine, all, h.at);
   const std::vector<std::int64_t>& at = h.at;
@@ -223,14 +236,27 @@ void Simulation::part_sums(double& step_boundary, double& step_absorbed, double&
     inv += static_cast<std::int64_t>(p[0]);
     const auto f = static_cast<std::int32_t>(p[1]);
     if (f >= 0 && (first < 0 || f < first)) first = f;
-    const auto nw = static_cast<std::size_t>(p[2]), nc = static_cast<std::size_t>(p[3]), ni = static_cast<std::size_t>(p[4]);
-    p += 5;
+    const auto nw = static_cast<std::size_t>(p[2]), nc = static_cast<std::size_t>(p[3]), ni = static_cast<std::size_t>(p[4]),
+               nx = static_cast<std::size_t>(p[5]);
+    p += 6;
     for (std::size_t k = 0; k < nw; ++k, p += 5)
       std::copy(p + 1, p + 5, work.begin() + 4 * static_cast<std::ptrdiff_t>(p[0]));
     for (std::size_t k = 0; k < nc; ++k, p += 3)
       std::copy(p + 1, p + 3, con.begin() + 2 * static_cast<std::ptrdiff_t>(p[0]));
     for (std::size_t k = 0; k < ni; ++k, p += 2) ins.emplace_back(static_cast<std::int64_t>(p[0]), p[1]);
+    for (std::size_t k = 0; k < nx; ++k, p += 3) {
+      const auto place = static_cast<std::size_t>(p[0]);
+      x_old[place] = p[1];
+      x_new[place] = p[2];
+    }
   }
+  // the explosive loads' power, as one process sums it: power_old as the loads were added (the
+  // pair loads first, then the single loads), power_new in the record's order (AppliedLoads)
+  power_old = 0;
+  for (std::size_t k = n_single; k < n_x; ++k) power_old += x_old[k];
+  for (std::size_t k = 0; k < n_single; ++k) power_old += x_old[k];
+  power_new = 0;
+  for (std::size_t k = 0; k < n_x; ++k) power_new += x_new[k];
   // the same sums, in the same order, as one process (step(), load_work, tie_failure)
   double cb = 0, cl = 0;
   const double half = 0.5 * dt_;

@@ -56,7 +56,7 @@ void print_partition(const cdem::Case& c, const cdem::PreparedCase& pc, int part
     return;
   }
   fmt::print("partition   {} parts (METIS k-way): {} to {} blocks, load imbalance {:.3f}, {} interfaces "
-             "cut ({:.2f} %), ghost blocks (the halo stage's two rings) {:.0f} (mean) / {} (max) per part, "
+             "cut ({:.2f} %), ghost blocks (the halo stage's vertex ring) {:.0f} (mean) / {} (max) per part, "
              "{:.2f} times the model's blocks stepped in all, {:.1f} / {} neighbours, {:.3g} / {:.3g} kB "
              "exchanged per part per step; {} of the charges split\n",
              parts, q.blocks_min, q.blocks_max, q.imbalance, q.edge_cut, 100 * q.edge_cut_share,

@@ -95,12 +95,13 @@ inline std::int64_t step_parts(const HaloCase& hc, const std::vector<std::int32_
   // reductions over the ranks).
   Case part_case = hc.c;
   part_case.fixed_dt = whole.dt();
-  const WholeModelSetup ws{whole.omega2_max(), {}};
   std::vector<PartModel> parts;
   std::vector<std::unique_ptr<Simulation>> sims;
   std::size_t ghosts = 0;
   for (int p : mine) {
     parts.push_back(cut_part(model, part, p));
+    WholeModelSetup ws{whole.omega2_max(), {}, {}, !whole.model().local_damping.empty()};
+    if (hc.c.interface_mode == InterfaceMode::Tied) ws.node_springs = node_spring_counts(model, parts.back());
     sims.push_back(std::make_unique<Simulation>(parts.back().model, part_case, &ws));
     ghosts += parts.back().ghost_blocks;
   }

@@ -51,7 +51,6 @@ void part_blocks(const Model& m, const std::vector<std::int32_t>& part, std::int
   if (part.size() != nb) throw std::logic_error("part_blocks: a part per block expected");
   // ring: 0 not in the part's model, 1 own, 2 ghost
   std::vector<std::uint8_t> in(nb, 0);
-  std::vector<std::int32_t> front;
   for (std::size_t b = 0; b < nb; ++b)
     if (part[b] == p) in[b] = 1;
   // ring 1: the blocks sharing a vertex with an own block
@@ -63,19 +62,9 @@ void part_blocks(const Model& m, const std::vector<std::int32_t>& part, std::int
       const auto v = static_cast<std::size_t>(m.node_vertex[n]);
       for (auto k = vstart[v]; k < vstart[v + 1]; ++k) {
         const auto o = static_cast<std::size_t>(vlist[static_cast<std::size_t>(k)]);
-        if (!in[o]) in[o] = 2, front.push_back(static_cast<std::int32_t>(o));
-      }
-    }
-  }
-  // ring 2: the face neighbours of ring 1
-  {
-    for (auto b : front)
-      for (auto e = m.block_iface_offset[b]; e < m.block_iface_offset[b + 1]; ++e) {
-        const std::int32_t code = m.block_iface_list[e];
-        const auto i = static_cast<std::size_t>(block_iface_index(code));
-        const auto o = static_cast<std::size_t>(code > 0 ? m.iface_block_b[i] : m.iface_block_a[i]);
         if (!in[o]) in[o] = 2;
       }
+    }
   }
   blocks.clear();
   own.clear();
@@ -293,6 +282,18 @@ void HaloExchange::exchange(Model& local) {
       b += 6;
     }
   }
+}
+
+std::vector<std::int32_t> node_spring_counts(const Model& whole, const PartModel& pm) {
+  std::vector<std::int32_t> all(whole.n_nodes(), 0);
+  for (std::size_t s = 0; s < whole.n_springs(); ++s) {
+    ++all[static_cast<std::size_t>(whole.sp_a[s])];
+    ++all[static_cast<std::size_t>(whole.sp_b[s])];
+  }
+  std::vector<std::int32_t> out;
+  out.reserve(pm.node.size());
+  for (auto n : pm.node) out.push_back(all[static_cast<std::size_t>(n)]);
+  return out;
 }
 
 }  // namespace cdem

@@ -2,16 +2,17 @@
 // steps a model of its own part and a ghost zone around it, instead of the whole model.
 //
 // Ownership: a block belongs to one part (partition_kway or block_ranges, partition.hpp); its
-// nodes belong to it too. A part's local model holds its own blocks and the ghost zone:
-//   - ring 1: every block that shares a mesh vertex with one of its own. A tied vertex cluster
-//     of one of its own nodes (ties.hpp) then has all its nodes in the local model, and so have
-//     the spring points acting on them (a point lies on a face through the vertex, and both
-//     blocks of that face share the vertex): the cluster's sum of forces and masses is the whole
-//     model's, in the same order;
-//   - ring 2: the blocks that share a face with ring 1. Every interface of a ring-1 block is then
-//     in the local model, so the spring-point count of a ring-1 node is the whole model's; it
-//     sets the opened points' stiffness at set-up (set_opened_stiffness: the least over an
-//     interface's nodes), and so the stiffness of every interface a part's own nodes feel.
+// nodes belong to it too. A part's local model holds its own blocks and the ghost zone: every
+// block that shares a mesh vertex with one of its own (one ring). A tied vertex cluster of one of
+// its own nodes (ties.hpp) then has all its nodes in the local model, and so have the spring
+// points acting on them (a point lies on a face through the vertex, and both blocks of that face
+// share the vertex): the cluster's sum of forces and masses is the whole model's, in the same
+// order. A ghost node's spring-point count, from which the opened points' stiffness is set
+// (set_opened_stiffness: the least over an interface's nodes), is the whole model's only if every
+// face of its block is in the part; it is handed to the part's set-up from the whole model
+// instead (node_spring_counts, WholeModelSetup::node_springs). Until 7 Dec 2026 a second ring (the
+// face neighbours of the first) made those counts whole, and made a part step 1.3-2 times more
+// ghosts.
 // The local model is cut from the set-up-ready model (build_model's, before Simulation) keeping
 // the global order of blocks, nodes, interfaces and vertices, so every sum the kernels form over
 // a node, a block or a cluster runs over the same terms in the same order as in the whole model:
@@ -22,7 +23,8 @@
 // Verified by tests/verification/test_halo.cpp (ghosts copied from a whole-model run) and
 // tests/mpi/test_halo_mpi.cpp (ghosts received over MPI); the run uses it through
 // solver/simulation_halo.cpp (the step's sums over the model in its order, the gathers) and
-// run.cpp. Not yet: contact, charges and their gas (docs/parallel.md, the plan).
+// run.cpp; the bar charges through solver/halo_charges.hpp. Not yet: contact, solid charges
+// (docs/parallel.md, the plan).
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -43,7 +45,11 @@ struct PartModel {
   std::size_t own_blocks = 0, ghost_blocks = 0;
 };
 
-// The blocks of part p (part: a part per block) and of its ghost zone (the rings above), as
+// Per node of the part `pm`, the whole model's count of its spring points (the part's set-up:
+// WholeModelSetup::node_springs).
+std::vector<std::int32_t> node_spring_counts(const Model& whole, const PartModel& pm);
+
+// The blocks of part p (part: a part per block) and of its ghost zone (the ring above), as
 // ascending global block indices, and per entry whether it is p's own.
 void part_blocks(const Model& m, const std::vector<std::int32_t>& part, std::int32_t p,
                  std::vector<std::int32_t>& blocks, std::vector<std::uint8_t>& own);

@@ -178,8 +178,7 @@ void sort_unique(std::vector<std::uint64_t>& v) {
 }
 
 // Every part's ghost zone as the halo stage builds it (halo.cpp, part_blocks), all parts at once:
-// the (part, ghost block) keys, sorted. Ring 1: the blocks of other parts at a vertex that a part
-// touches; ring 2: their face neighbours of other parts.
+// the (part, ghost block) keys, sorted: the blocks of other parts at a vertex that a part touches.
 std::vector<std::uint64_t> halo_ghosts(const BlockGraph& g, const std::vector<std::int32_t>& part) {
   const std::size_t n = g.n();
   std::int32_t nv = 0;
@@ -214,20 +213,7 @@ std::vector<std::uint64_t> halo_ghosts(const BlockGraph& g, const std::vector<st
   std::vector<std::int64_t>().swap(start);
   std::vector<std::int32_t>().swap(list);
   sort_unique(ring1);
-  std::vector<std::uint64_t> ring2;
-  for (auto k : ring1) {
-    const auto p = key_part(k), b = key_block(k);
-    for (auto e = g.xadj[b]; e < g.xadj[b + 1]; ++e) {
-      const auto o = g.adjncy[e];
-      if (part[static_cast<std::size_t>(o)] == p) continue;
-      const auto ko = key_of(p, o);
-      if (!std::binary_search(ring1.begin(), ring1.end(), ko)) ring2.push_back(ko);
-    }
-  }
-  sort_unique(ring2);
-  std::vector<std::uint64_t> all(ring1.size() + ring2.size());
-  std::merge(ring1.begin(), ring1.end(), ring2.begin(), ring2.end(), all.begin());
-  return all;
+  return ring1;
 }
 
 }  // namespace

@@ -7,8 +7,8 @@
 // between them, so that a cut through a charge is avoided where the balance allows it.
 //
 // The exchange model (partition_quality) is the halo stage's (parallel/halo.hpp), as built: each
-// part steps its own blocks and a ghost zone of two rings (ring 1: every block sharing a mesh
-// vertex with an own block; ring 2: their face neighbours). Per step a part receives its ghost
+// part steps its own blocks and a ghost zone (every block sharing a mesh vertex with an own
+// block). Per step a part receives its ghost
 // blocks' node positions and velocities (6 doubles per node) from their owners and sends as much
 // for its own blocks that are ghosts elsewhere: one message each way per neighbouring part. Every
 // rank also joins two collectives per step (the step's ordered sums, gathered whole, and the stop
@@ -77,7 +77,7 @@ struct PartitionQuality {
   double edge_cut_share = 0;        // of all interfaces
   double imbalance = 0;             // max part weight / mean part weight
   std::int64_t blocks_min = 0, blocks_max = 0;
-  // The halo stage's ghost zone (two rings, halo.hpp) and exchange, per part: its ghost blocks,
+  // The halo stage's ghost zone (halo.hpp) and exchange, per part: its ghost blocks,
   // the weight it steps (own + ghosts), its neighbours, the bytes it receives + sends per step.
   std::int64_t ghosts_max = 0;      // ghost blocks of the part with the most
   double ghosts_mean = 0;

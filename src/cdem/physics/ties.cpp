@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 #include "cdem/mesh/element_geometry.hpp"
 
@@ -322,12 +323,18 @@ std::size_t count_clusters(const Model& m) {
   return n;
 }
 
-OpenedStiffness set_opened_stiffness(Model& m, double eta, double omega2_max) {
+OpenedStiffness set_opened_stiffness(Model& m, double eta, double omega2_max,
+                                     const std::vector<std::int32_t>* counts) {
   const int np = m.springs_per_iface;
   std::vector<std::int32_t> count(m.n_nodes(), 0);
-  for (std::size_t s = 0; s < m.n_springs(); ++s) {
-    ++count[m.sp_a[s]];
-    ++count[m.sp_b[s]];
+  if (counts) {
+    if (counts->size() != m.n_nodes()) throw std::logic_error("set_opened_stiffness: a count per node expected");
+    count = *counts;
+  } else {
+    for (std::size_t s = 0; s < m.n_springs(); ++s) {
+      ++count[m.sp_a[s]];
+      ++count[m.sp_b[s]];
+    }
   }
   std::vector<double> ratio;
   ratio.reserve(m.n_ifaces());

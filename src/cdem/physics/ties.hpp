@@ -77,6 +77,9 @@ std::size_t count_clusters(const Model& m);
 struct OpenedStiffness {
   double ratio_min = 0, ratio_median = 0;
 };
-OpenedStiffness set_opened_stiffness(Model& m, double eta, double omega2_max);
+// `counts`: per node its spring-point count, when it is not m's own (a part of a distributed
+// model: the whole model's).
+OpenedStiffness set_opened_stiffness(Model& m, double eta, double omega2_max,
+                                     const std::vector<std::int32_t>* counts = nullptr);
 
 }  // namespace cdem

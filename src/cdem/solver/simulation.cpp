@@ -32,7 +32,13 @@ Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole)
     m_.damping = whole->damping;
   else
     setup_damping_zones(c);
-  release_zero_damping(m_);  // after the zones: an undamped model drops its damping arrays
+  // after the zones: an undamped model drops its damping arrays (a part those the whole drops)
+  if (!whole) {
+    release_zero_damping(m_);
+  } else {
+    if (whole->damping.empty()) std::vector<double>().swap(m_.damping);
+    if (!whole->local_damping) std::vector<double>().swap(m_.local_damping);
+  }
   std::vector<double>().swap(m_.inv_mass);  // no kernel reads it (integrate uses mass)
   release_unused_spring_state(m_);  // no fracture-energy law: sp_w, sp_slip, sp_dil dropped
   for (const auto& f : c.analysis.main_faces)
@@ -70,7 +76,8 @@ Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole)
     build_ties(m_);
     stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
     if (whole) omega2_max_ = whole->omega2_max;
-    opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_);
+    opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_,
+                                   whole && !whole->node_springs.empty() ? &whole->node_springs : nullptr);
     const std::size_t nv = m_.n_vertices();
     vtx_ke_.assign(nv, 0.0);
     vtx_reaction_.assign(2 * nv, 0.0);

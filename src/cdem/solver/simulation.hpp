@@ -81,6 +81,12 @@ struct WholeModelSetup {
   // per node of the part, the whole model's mass-proportional damping (its damping zones are
   // graded over the whole zone); empty: the part's own
   std::vector<double> damping;
+  // tied mode: per node of the part, the whole model's count of its spring points (the opened
+  // points' stiffness is set from it); empty: the part's own
+  std::vector<std::int32_t> node_springs;
+  // whether the whole model keeps its local (material) damping array: a part keeps the damping
+  // arrays the whole keeps, zero or not, so that its nodes take the kernels' same paths
+  bool local_damping = false;
 };
 
 class Simulation {

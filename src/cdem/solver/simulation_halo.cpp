@@ -40,6 +40,11 @@ struct HaloIndex {
 // On the whole model: per rank, its own entities in ascending global order.
 struct HaloGatherLists {
   std::vector<std::vector<std::int32_t>> blocks, nodes, ifaces, vertices, work, loads;
+  // the gather's scratch buffers, kept between gathers (a sample every few steps: no allocation,
+  // no first touch of fresh pages each time; the lists above are what the gather shares)
+  mutable std::vector<double> buf, all;
+  mutable std::vector<std::int64_t> at;
+  mutable std::vector<std::uint8_t> fresh, fresh_w;
 };
 
 namespace {
@@ -318,7 +323,8 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
   }
   const HaloGatherLists& g = *gather_;
   // This part's own entities, ascending in the whole's order, field by field as unpacked below.
-  std::vector<double> buf;
+  std::vector<double>& buf = g.buf;
+  buf.clear();
   Put put{buf};
   for (std::size_t b = 0; b < l.n_blocks(); ++b) {
     if (!h.own_block[b]) continue;
@@ -336,7 +342,7 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
     put(l.f[n]);
     if (extra_local) put((*extra_local)[n]);
   }
-  std::vector<std::uint8_t> fresh;  // tied: activated in this step (after the list's sorted head)
+  std::vector<std::uint8_t>& fresh = g.fresh;  // tied: activated in this step (after the list's sorted head)
   if (l.tied) {
     fresh.assign(l.n_ifaces(), 0);
     for (std::size_t k = l.active_sorted; k < l.active_ifaces.size(); ++k) fresh[static_cast<std::size_t>(l.active_ifaces[k])] = 1;
@@ -375,11 +381,12 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
   for (const auto& [gl, j] : h.loads)
     for (int q = 0; q < 3; ++q) put(local.bc_.load_force[3 * static_cast<std::size_t>(j) + q]);
 
-  std::vector<double> all;
-  std::vector<std::int64_t> at;
+  std::vector<double>& all = g.all;
+  std::vector<std::int64_t>& at = g.at;
   gather_all(buf, all, at);
   Model& m = m_;
-  std::vector<std::uint8_t> fresh_w(m.tied ? m.n_ifaces() : 0, 0);
+  std::vector<std::uint8_t>& fresh_w = g.fresh_w;
+  fresh_w.assign(m.tied ? m.n_ifaces() : 0, 0);
   for (int r = 0; r < h.ranks; ++r) {
     Get get{all.data() + at[r]};
     const auto rr = static_cast<std::size_t>(r);

@@ -158,6 +158,16 @@ for f in energy.csv monitors.csv fracture.csv grading.csv reactions.csv; do
   cmp -s "$TMP/h_H3_1/$f" "$TMP/h_c/$f" || fail "3D box continued: $f differs from the 1-rank run's"
 done
 same "$TMP/h_c0" "$TMP/h_c"
+# the same for the bar box: its checkpoint holds the bars' state every rank stepped
+run 2 "$TMP/h_b0" "${B3[@]}" --set simulation.checkpoint_interval=1e-4 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "bar box with a checkpoint"; }
+cp -r "$TMP/h_b0" "$TMP/h_b"
+rm "$(ls -d "$TMP/h_b"/checkpoints/* | tail -1)"
+"${MPIRUN[@]}" -np 3 "$BIN" run "${B3[@]}" --set simulation.checkpoint_interval=1e-4 --restart "$TMP/h_b" \
+  -t 1 --fixed-threads -q 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "bar box continued on 3 ranks"; }
+grep -q '"restarted_at_step": [1-9]' "$TMP/h_b/summary.json" || fail "bar box: not restarted mid-run"
+for f in energy.csv monitors.csv fracture.csv charges.csv grading.csv; do
+  cmp -s "$TMP/h_B3_1/$f" "$TMP/h_b/$f" || fail "bar box continued: $f differs from the 1-rank run's"
+done
 # partition.vtu: each block's rank, as many parts as ranks (read with the package's VTU reader)
 PYTHONPATH="$ROOT/python" "$PY" - "$TMP/h_H3_3/partition.vtu" "$TMP/h_H3_1/summary.json" <<'EOF' || fail "partition.vtu of the 3-rank run"
 import json, sys
@@ -172,7 +182,7 @@ EOF
 "$BIN" check "${B3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the bar box's stage"
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
   fail "check --parts: the 2D bar case's stage (contact)"
-echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; a halo checkpoint continued on 3 ranks"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box) continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets

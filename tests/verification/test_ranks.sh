@@ -147,27 +147,27 @@ done
   { cat "$TMP/log_h"; fail "3D box, --ranks-mode replicated"; }
 [ "$(mode "$TMP/h_rep")" = replicated ] || fail "--ranks-mode replicated not taken"
 same "$TMP/h_H3_1" "$TMP/h_rep"
-# a checkpoint of a halo run (the whole state, gathered) continued on 3 ranks (replicated)
-run 2 "$TMP/h_c0" "${H3[@]}" --set simulation.checkpoint_interval=1e-4 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "3D box with a checkpoint"; }
-cp -r "$TMP/h_c0" "$TMP/h_c"
-rm "$(ls -d "$TMP/h_c"/checkpoints/* | tail -1)"
-"${MPIRUN[@]}" -np 3 "$BIN" run "${H3[@]}" --set simulation.checkpoint_interval=1e-4 --restart "$TMP/h_c" \
-  -t 1 --fixed-threads -q 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "3D box continued on 3 ranks"; }
-grep -q '"restarted_at_step": [1-9]' "$TMP/h_c/summary.json" || fail "3D box: not restarted mid-run"
-for f in energy.csv monitors.csv fracture.csv grading.csv reactions.csv; do
-  cmp -s "$TMP/h_H3_1/$f" "$TMP/h_c/$f" || fail "3D box continued: $f differs from the 1-rank run's"
-done
-same "$TMP/h_c0" "$TMP/h_c"
-# the same for the bar box: its checkpoint holds the bars' state every rank stepped
-run 2 "$TMP/h_b0" "${B3[@]}" --set simulation.checkpoint_interval=1e-4 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "bar box with a checkpoint"; }
-cp -r "$TMP/h_b0" "$TMP/h_b"
-rm "$(ls -d "$TMP/h_b"/checkpoints/* | tail -1)"
-"${MPIRUN[@]}" -np 3 "$BIN" run "${B3[@]}" --set simulation.checkpoint_interval=1e-4 --restart "$TMP/h_b" \
-  -t 1 --fixed-threads -q 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "bar box continued on 3 ranks"; }
-grep -q '"restarted_at_step": [1-9]' "$TMP/h_b/summary.json" || fail "bar box: not restarted mid-run"
-for f in energy.csv monitors.csv fracture.csv charges.csv grading.csv; do
-  cmp -s "$TMP/h_B3_1/$f" "$TMP/h_b/$f" || fail "bar box continued: $f differs from the 1-rank run's"
-done
+# continued NAME CASE DIR: a checkpoint of a halo run on 2 ranks (the whole state, gathered; the
+# bars' state every rank stepped) continued on 3 ranks (replicated) from its last checkpoint but
+# one: its histories are the uninterrupted 1-rank run's (in DIR), and its outputs the 2-rank run's
+continued() {
+  local what=$1 case=$2 ref=$3
+  local -n args=$case
+  run 2 "$TMP/${case}_c0" "${args[@]}" --set simulation.checkpoint_interval=1e-4 2> "$TMP/log_h" ||
+    { cat "$TMP/log_h"; fail "$what with a checkpoint"; }
+  cp -r "$TMP/${case}_c0" "$TMP/${case}_c"
+  rm "$(ls -d "$TMP/${case}_c"/checkpoints/* | tail -1)"
+  "${MPIRUN[@]}" -np 3 "$BIN" run "${args[@]}" --set simulation.checkpoint_interval=1e-4 --restart "$TMP/${case}_c" \
+    -t 1 --fixed-threads -q 2> "$TMP/log_h" || { cat "$TMP/log_h"; fail "$what continued on 3 ranks"; }
+  grep -q '"restarted_at_step": [1-9]' "$TMP/${case}_c/summary.json" || fail "$what: not restarted mid-run"
+  for f in energy.csv monitors.csv fracture.csv charges.csv grading.csv reactions.csv; do
+    [ -f "$ref/$f" ] || continue
+    cmp -s "$ref/$f" "$TMP/${case}_c/$f" || fail "$what continued: $f differs from the 1-rank run's"
+  done
+  same "$TMP/${case}_c0" "$TMP/${case}_c"
+}
+continued "3D box" H3 "$TMP/h_H3_1"
+continued "bar box" B3 "$TMP/h_B3_1"
 # partition.vtu: each block's rank, as many parts as ranks (read with the package's VTU reader)
 PYTHONPATH="$ROOT/python" "$PY" - "$TMP/h_H3_3/partition.vtu" "$TMP/h_H3_1/summary.json" <<'EOF' || fail "partition.vtu of the 3-rank run"
 import json, sys

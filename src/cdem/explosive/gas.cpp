@@ -246,11 +246,13 @@ void gas_state(const Model& m, GasField& g, const std::vector<Eos>& eos, double 
       if (st == kSkip) continue;
       const double w = g.list_aperture[k];
       std::int32_t d = g.list_body[k];
+      std::int32_t source = -1;  // (the block a crack without gas takes its gas from)
       if (st & kSerial) {
         const std::size_t i = iface_at(k);
         const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
         const std::int32_t da = g.block_body[ba], db = g.block_body[bb];
         d = da >= 0 ? da : db;
+        source = da >= 0 ? ba : bb;
         if (d < 0 || !body_of(d) || !(w > 0)) continue;
         g.iface_body[i] = d;
         st = advance_fill(i, d, ba, bb) ? kReached : kSkip;
@@ -260,14 +262,12 @@ void gas_state(const Model& m, GasField& g, const std::vector<Eos>& eos, double 
       if (st & kReached) {
         const std::size_t i = iface_at(k);
         const auto ba = m.iface_block_a[i], bb = m.iface_block_b[i];
-        // (a given list: a crack that filled in the step its gas reached it, next to a block
-        // reached in this pass, puts the front further from the step's start than the list's
-        // rule sees: CrackInputs)
-        if (given && (st & kSerial)) {
-          const auto& r = g.reached_now;
-          if (std::find(r.begin(), r.end(), ba) != r.end() || std::find(r.begin(), r.end(), bb) != r.end())
-            g.chain_overflow = static_cast<std::int32_t>(i);
-        }
+        // (a given list: a crack that filled in the step its gas reached it, from a block reached
+        // in this pass, puts the front further from the step's start than the list's rule sees:
+        // CrackInputs)
+        if (given && (st & kSerial) &&
+            std::find(g.reached_now.begin(), g.reached_now.end(), source) != g.reached_now.end())
+          g.chain_overflow = static_cast<std::int32_t>(i);
         for (const auto blk : {ba, bb})
           if (g.block_body[blk] < 0) {
             g.block_body[blk] = d;

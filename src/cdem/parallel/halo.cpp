@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "cdem/parallel/partition.hpp"
 #include "cdem/parallel/ranks.hpp"
 
 namespace cdem {
@@ -29,20 +30,6 @@ std::vector<T> take(const std::vector<T>& v, const std::vector<std::int32_t>& id
   return out;
 }
 
-// Mesh vertex -> the blocks holding one of its nodes (ascending), as CSR.
-void vertex_blocks(const Model& m, std::vector<std::int32_t>& start, std::vector<std::int32_t>& list) {
-  std::int32_t nv = 0;
-  for (auto v : m.node_vertex) nv = std::max(nv, v + 1);
-  start.assign(static_cast<std::size_t>(nv) + 1, 0);
-  for (auto v : m.node_vertex) ++start[static_cast<std::size_t>(v) + 1];
-  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) start[v + 1] += start[v];
-  list.assign(m.node_vertex.size(), 0);
-  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-  for (std::size_t b = 0; b < m.n_blocks(); ++b)  // (blocks ascending: each vertex's list is too)
-    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n)
-      list[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.node_vertex[n])]++)] = static_cast<std::int32_t>(b);
-}
-
 }  // namespace
 
 void part_blocks(const Model& m, const std::vector<std::int32_t>& part, std::int32_t p,
@@ -55,7 +42,7 @@ void part_blocks(const Model& m, const std::vector<std::int32_t>& part, std::int
     if (part[b] == p) in[b] = 1;
   // ring 1: the blocks sharing a vertex with an own block
   std::vector<std::int32_t> vstart, vlist;
-  vertex_blocks(m, vstart, vlist);
+  vertex_blocks(m.block_first_node, m.node_vertex, vstart, vlist);
   for (std::size_t b = 0; b < nb; ++b) {
     if (part[b] != p) continue;
     for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) {
@@ -282,6 +269,14 @@ void HaloExchange::exchange(Model& local) {
       b += 6;
     }
   }
+}
+
+std::vector<std::uint8_t> own_interfaces(const PartModel& pm, const Model& local, const std::vector<std::int32_t>& part,
+                                         std::int32_t p) {
+  std::vector<std::uint8_t> own(local.n_ifaces());
+  for (std::size_t i = 0; i < local.n_ifaces(); ++i)
+    own[i] = part[static_cast<std::size_t>(pm.block[static_cast<std::size_t>(local.iface_block_a[i])])] == p;
+  return own;
 }
 
 std::vector<std::int32_t> node_spring_counts(const Model& whole, const PartModel& pm) {

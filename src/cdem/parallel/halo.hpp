@@ -45,6 +45,11 @@ struct PartModel {
   std::size_t own_blocks = 0, ghost_blocks = 0;
 };
 
+// Per interface of the part `pm` (its model `local`, pm.model or the one set up from it): 1 when
+// part p owns it. An interface belongs to the part of its block A.
+std::vector<std::uint8_t> own_interfaces(const PartModel& pm, const Model& local, const std::vector<std::int32_t>& part,
+                                         std::int32_t p);
+
 // Per node of the part `pm`, the whole model's count of its spring points (the part's set-up:
 // WholeModelSetup::node_springs).
 std::vector<std::int32_t> node_spring_counts(const Model& whole, const PartModel& pm);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -36,6 +37,21 @@ void fill_csr(BlockGraph& g, std::size_t n, const std::vector<std::array<std::in
 }
 
 }  // namespace
+
+void vertex_blocks(const std::vector<std::int32_t>& offset, const std::vector<std::int32_t>& vertices,
+                   std::vector<std::int32_t>& start, std::vector<std::int32_t>& list) {
+  std::int32_t nv = 0;
+  for (auto v : vertices) nv = std::max(nv, v + 1);
+  start.assign(static_cast<std::size_t>(nv) + 1, 0);
+  for (auto v : vertices) ++start[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) start[v + 1] += start[v];
+  list.assign(vertices.size(), 0);
+  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t b = 0; b + 1 < offset.size(); ++b)  // (blocks ascending: each vertex's list is too)
+    for (auto k = offset[b]; k < offset[b + 1]; ++k)
+      list[static_cast<std::size_t>(fill[static_cast<std::size_t>(vertices[static_cast<std::size_t>(k)])]++)] =
+          static_cast<std::int32_t>(b);
+}
 
 std::int32_t block_weight(ElemType type, int interfaces) {
   const int kernel = type == ElemType::Tet4 ? 10 : type == ElemType::Quad4 ? 8 : 4;
@@ -107,6 +123,8 @@ BlockGraph mesh_block_graph(const Mesh& mesh) {
   fill_csr(g, n, edges);
   g.vwgt.resize(n);
   for (std::size_t e = 0; e < n; ++e) g.vwgt[e] = block_weight(mesh.elem_type[e], g.xadj[e + 1] - g.xadj[e]);
+  if (4 * n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    throw std::length_error("mesh_block_graph: more than 2^31 block vertices");
   g.bv_offset.assign(n + 1, 0);
   for (std::size_t e = 0; e < n; ++e) g.bv_offset[e + 1] = g.bv_offset[e] + nodes_of(mesh.elem_type[e]);
   g.bv.resize(static_cast<std::size_t>(g.bv_offset[n]));
@@ -180,24 +198,12 @@ void sort_unique(std::vector<std::uint64_t>& v) {
 // Every part's ghost zone as the halo stage builds it (halo.cpp, part_blocks), all parts at once:
 // the (part, ghost block) keys, sorted: the blocks of other parts at a vertex that a part touches.
 std::vector<std::uint64_t> halo_ghosts(const BlockGraph& g, const std::vector<std::int32_t>& part) {
-  const std::size_t n = g.n();
-  std::int32_t nv = 0;
-  for (auto v : g.bv) nv = std::max(nv, v + 1);
-  // vertex -> blocks (CSR)
-  std::vector<std::int64_t> start(static_cast<std::size_t>(nv) + 1, 0);
-  for (auto v : g.bv) ++start[static_cast<std::size_t>(v) + 1];
-  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) start[v + 1] += start[v];
-  std::vector<std::int32_t> list(g.bv.size());
-  {
-    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t b = 0; b < n; ++b)
-      for (auto k = g.bv_offset[b]; k < g.bv_offset[b + 1]; ++k)
-        list[static_cast<std::size_t>(fill[static_cast<std::size_t>(g.bv[static_cast<std::size_t>(k)])]++)] =
-            static_cast<std::int32_t>(b);
-  }
+  std::vector<std::int32_t> start, list;
+  vertex_blocks(g.bv_offset, g.bv, start, list);
+  const std::size_t nv = start.size() - 1;
   std::vector<std::uint64_t> ring1;
   std::vector<std::int32_t> at;  // the parts at a vertex
-  for (std::size_t v = 0; v < static_cast<std::size_t>(nv); ++v) {
+  for (std::size_t v = 0; v < nv; ++v) {
     at.clear();
     for (auto k = start[v]; k < start[v + 1]; ++k) {
       const auto p = part[static_cast<std::size_t>(list[static_cast<std::size_t>(k)])];
@@ -210,7 +216,7 @@ std::vector<std::uint64_t> halo_ghosts(const BlockGraph& g, const std::vector<st
         if (p != part[static_cast<std::size_t>(b)]) ring1.push_back(key_of(p, b));
     }
   }
-  std::vector<std::int64_t>().swap(start);
+  std::vector<std::int32_t>().swap(start);
   std::vector<std::int32_t>().swap(list);
   sort_unique(ring1);
   return ring1;

@@ -27,11 +27,17 @@ namespace cdem {
 struct BlockGraph {
   std::vector<std::int32_t> xadj, adjncy, vwgt, adjwgt;
   // each block's mesh vertices (CSR; a CDEM block has a node per vertex): the halo's vertex ring
-  std::vector<std::int64_t> bv_offset;
+  std::vector<std::int32_t> bv_offset;
   std::vector<std::int32_t> bv;
   int points_per_iface = 3;  // spring points per interface: 2 in 2D, 3 in 3D
   std::size_t n() const { return xadj.empty() ? 0 : xadj.size() - 1; }
 };
+
+// Mesh vertex -> the blocks holding it, ascending, as CSR (`start`: a vertex count + 1 entries),
+// from block -> its vertices (`offset`: a block count + 1 entries; a model's block_first_node and
+// node_vertex, or a graph's bv_offset and bv).
+void vertex_blocks(const std::vector<std::int32_t>& offset, const std::vector<std::int32_t>& vertices,
+                   std::vector<std::int32_t>& start, std::vector<std::int32_t>& list);
 
 // Step cost of a block in weight units, from the kernel split of `cdemblast bench` (tied mode,
 // 1 thread, docs/performance.md): the block kernel ~10 units per tetrahedron (quad 8, triangle

@@ -13,17 +13,16 @@ namespace cdem {
 
 HaloBars::HaloBars(BarCharges& bars, const Model& whole, const PartModel& pm, const Model& l,
                    const std::vector<std::int32_t>& part, int rank)
-    : bars_(bars), whole_(whole), block_(pm.block), iface_(pm.iface), own_block_(pm.own) {
-  if (l.n_blocks() != block_.size() || l.n_ifaces() != iface_.size())
+    : bars_(bars), whole_(whole), iface_(pm.iface), own_block_(pm.own) {
+  const std::vector<std::int32_t>& block = pm.block;
+  if (l.n_blocks() != block.size() || l.n_ifaces() != iface_.size())
     throw std::logic_error("HaloBars: the local model is not the part's");
-  own_iface_.resize(l.n_ifaces());
-  for (std::size_t i = 0; i < l.n_ifaces(); ++i)
-    own_iface_[i] = part[static_cast<std::size_t>(block_[static_cast<std::size_t>(l.iface_block_a[i])])] == rank;
+  own_iface_ = own_interfaces(pm, l, part, rank);
   elem_local_.assign(bars.elem_block.size(), -1);
   for (std::size_t i = 0; i < bars.elem_block.size(); ++i) {
-    const auto it = std::lower_bound(block_.begin(), block_.end(), bars.elem_block[i]);
-    if (it == block_.end() || *it != bars.elem_block[i]) continue;
-    const auto lb = static_cast<std::int32_t>(it - block_.begin());
+    const auto it = std::lower_bound(block.begin(), block.end(), bars.elem_block[i]);
+    if (it == block.end() || *it != bars.elem_block[i]) continue;
+    const auto lb = static_cast<std::int32_t>(it - block.begin());
     elem_local_[i] = lb;
     if (own_block_[static_cast<std::size_t>(lb)]) own_elems_.emplace_back(static_cast<std::int32_t>(i), lb);
   }

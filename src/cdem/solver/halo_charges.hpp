@@ -40,7 +40,7 @@ class HaloBars {
  private:
   BarCharges& bars_;
   const Model& whole_;
-  std::vector<std::int32_t> block_, iface_;           // local -> global
+  std::vector<std::int32_t> iface_;                   // local -> global
   std::vector<std::uint8_t> own_block_, own_iface_;   // per local entity
   std::vector<std::int32_t> elem_local_;              // per bound block (bars.elem_block): local block, -1
   std::vector<std::pair<std::int32_t, std::int32_t>> own_elems_;  // (bound block index, local block)

@@ -281,14 +281,12 @@ void Simulation::step(bool sample) {
   if (halo_) {
     part_inverted(inv, first);  // a part: its own blocks (over the whole model in part_sums)
   } else if (inv > 0) {
-    // A bar's charge blocks (mostly products: little or no rock stiffness) may collapse once the
-    // gas has left them; that is not the rock inverting (the run goes on). Recounted here, in
-    // the rare steps with an inversion.
+    // only the rock's inversions stop a run (rock_inverted): recounted here, in the rare steps
+    // with an inversion
     inv = 0;
     first = -1;
     for (std::size_t b = 0; b < m_.n_blocks(); ++b)
-      if (!(m_.vol_ratio[b] > 0) && !m_.block_materials[m_.block_material[b]].charge_block &&
-          m_.block_materials[m_.block_material[b]].explosive.empty()) {
+      if (rock_inverted(b)) {
         if (first < 0) first = static_cast<std::int32_t>(b);
         ++inv;
       }

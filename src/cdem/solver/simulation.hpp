@@ -223,6 +223,12 @@ class Simulation {
                  std::int32_t& first, double& power_old, double& power_new);
   // a part's inverted blocks: its own blocks' count and first (global) block
   void part_inverted(std::int64_t& inv, std::int32_t& first) const;
+  // Block b has inverted and is rock: a bar's charge blocks and a solid charge's explosive blocks
+  // (mostly products) may collapse once their gas has left them, and the run goes on.
+  bool rock_inverted(std::size_t b) const {
+    const BlockMaterial& mt = m_.block_materials[m_.block_material[b]];
+    return !(m_.vol_ratio[b] > 0) && !mt.charge_block && mt.explosive.empty();
+  }
   std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)
   std::vector<double> con_terms_;  // a part's step, springs mode: two terms per constraint
 };

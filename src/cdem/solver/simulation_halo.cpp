@@ -103,9 +103,7 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
   h->own_node.assign(m_.n_nodes(), 0);
   for (std::size_t b = 0; b < m_.n_blocks(); ++b)
     for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n) h->own_node[n] = pm.own[b];
-  h->own_iface.resize(m_.n_ifaces());
-  for (std::size_t i = 0; i < m_.n_ifaces(); ++i)
-    h->own_iface[i] = part[static_cast<std::size_t>(pm.block[static_cast<std::size_t>(m_.iface_block_a[i])])] == h->rank;
+  h->own_iface = own_interfaces(pm, m_, part, h->rank);
   const Model& w = whole.m_;
   if (m_.tied) {
     const auto owner = vertex_owner(w, part);
@@ -174,8 +172,7 @@ void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
   first = -1;
   if (!any) return;
   for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
-    const BlockMaterial& mt = m_.block_materials[m_.block_material[b]];
-    if (halo_->own_block[b] && !(m_.vol_ratio[b] > 0) && !mt.charge_block && mt.explosive.empty()) {
+    if (halo_->own_block[b] && rock_inverted(b)) {
       if (first < 0) first = halo_->block[b];
       ++inv;
     }

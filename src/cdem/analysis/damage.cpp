@@ -7,47 +7,59 @@ bool counts_as_rock(const Model& m, std::size_t s) {
   return im.law != InterfaceLaw::Elastic && !im.precracked;
 }
 
-FractureDegree fracture_degree(const Model& m) {
-  FractureDegree fd;
-  double total = 0, bt = 0, bs = 0;
-  for (std::size_t s = 0; s < m.n_springs(); ++s) {
-    if (!counts_as_rock(m, s)) continue;
-    total += m.sp_area[s];
-    ++fd.total;
-    if (m.sp_state[s] != kIntact) {
-      ++fd.broken;
-      (m.sp_mode[s] == kModeShear ? bs : bt) += m.sp_area[s];
+FractureDegree fracture_degree(const Model& m, const std::uint8_t* own_iface, const SumReducer* r) {
+  enum : std::size_t { kTotal, kTensile, kShear, kCount, kBroken, kSums };
+  const auto np = static_cast<std::size_t>(m.springs_per_iface);
+  const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
+    std::int64_t total = 0, broken = 0;
+    for (std::size_t s = 0; s < m.n_springs(); ++s) {
+      if (!counts_as_rock(m, s) || (own_iface && !own_iface[s / np])) continue;
+      put(kTotal, m.sp_area[s]);
+      ++total;
+      if (m.sp_state[s] != kIntact) {
+        ++broken;
+        put(m.sp_mode[s] == kModeShear ? kShear : kTensile, m.sp_area[s]);
+      }
     }
-  }
-  if (total > 0) {
-    fd.tensile = bt / total;
-    fd.shear = bs / total;
-    fd.area = (bt + bs) / total;
+    put(kCount, static_cast<double>(total));  // (integers below 2^53: exact)
+    put(kBroken, static_cast<double>(broken));
+  }, r);
+  FractureDegree fd;
+  fd.total = static_cast<std::int64_t>(sum[kCount]);
+  fd.broken = static_cast<std::int64_t>(sum[kBroken]);
+  if (sum[kTotal] > 0) {
+    fd.tensile = sum[kTensile] / sum[kTotal];
+    fd.shear = sum[kShear] / sum[kTotal];
+    fd.area = (sum[kTensile] + sum[kShear]) / sum[kTotal];
     fd.count = static_cast<double>(fd.broken) / static_cast<double>(fd.total);
   }
   return fd;
 }
 
-RegionFracture fracture_degree_by_region(const Model& m) {
+RegionFracture fracture_degree_by_region(const Model& m, const std::uint8_t* own_iface, const SumReducer* r) {
   const std::size_t nr = m.region_names.size();
-  std::vector<double> total(nr, 0.0), broken(nr, 0.0);
-  for (std::size_t s = 0; s < m.n_springs(); ++s) {
-    if (!counts_as_rock(m, s)) continue;
-    const std::size_t i = s / m.springs_per_iface;
-    const auto ra = m.block_region[m.iface_block_a[i]], rb = m.block_region[m.iface_block_b[i]];
-    const double a = m.sp_area[s], br = m.sp_state[s] != kIntact ? a : 0.0;
-    total[ra] += a;
-    broken[ra] += br;
-    if (rb != ra) {
-      total[rb] += a;
-      broken[rb] += br;
+  const auto np = static_cast<std::size_t>(m.springs_per_iface);
+  // per region r: its total area (sum 2 r) and its broken area (2 r + 1)
+  const std::vector<double> sum = sum_exactly(2 * nr, [&](auto&& put) {
+    for (std::size_t s = 0; s < m.n_springs(); ++s) {
+      if (!counts_as_rock(m, s) || (own_iface && !own_iface[s / np])) continue;
+      const std::size_t i = s / np;
+      const std::size_t ra = m.block_region[m.iface_block_a[i]], rb = m.block_region[m.iface_block_b[i]];
+      const double a = m.sp_area[s];
+      const bool broken = m.sp_state[s] != kIntact;
+      put(2 * ra, a);
+      if (broken) put(2 * ra + 1, a);
+      if (rb != ra) {  // (an interface between two regions counts in both)
+        put(2 * rb, a);
+        if (broken) put(2 * rb + 1, a);
+      }
     }
-  }
+  }, r);
   RegionFracture rf;
-  for (std::size_t r = 0; r < nr; ++r)
-    if (total[r] > 0) {
-      rf.regions.push_back(static_cast<std::int32_t>(r));
-      rf.degree.push_back(broken[r] / total[r]);
+  for (std::size_t reg = 0; reg < nr; ++reg)
+    if (sum[2 * reg] > 0) {
+      rf.regions.push_back(static_cast<std::int32_t>(reg));
+      rf.degree.push_back(sum[2 * reg + 1] / sum[2 * reg]);
     }
   return rf;
 }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "cdem/core/exact_sum.hpp"
 #include "cdem/model/model.hpp"
 
 namespace cdem {
@@ -22,7 +23,11 @@ struct FractureDegree {
 // True for spring points that count as rock (breakable, not pre-cracked).
 bool counts_as_rock(const Model& m, std::size_t spring);
 
-FractureDegree fracture_degree(const Model& m);
+// The areas are summed exactly (core/exact_sum.hpp). own_iface (per interface, 1 own; null:
+// all) and r: a part of a distributed run lists its own interfaces' points and the sums are
+// reduced over the ranks (every rank calls it at once), with the bits one process gets.
+FractureDegree fracture_degree(const Model& m, const std::uint8_t* own_iface = nullptr,
+                               const SumReducer* r = nullptr);
 
 // Fracture degree per region (fracture.csv degree_area_<region>, summary.json
 // fracture_degree_regions): for region r, the broken / total area of the rock spring points
@@ -33,7 +38,8 @@ struct RegionFracture {
   std::vector<std::int32_t> regions;
   std::vector<double> degree;  // area fraction, per listed region
 };
-RegionFracture fracture_degree_by_region(const Model& m);
+RegionFracture fracture_degree_by_region(const Model& m, const std::uint8_t* own_iface = nullptr,
+                                         const SumReducer* r = nullptr);
 
 void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode);
 

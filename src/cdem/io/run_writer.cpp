@@ -295,7 +295,8 @@ void RunWriter::write_fields(const Model& m, double t, const std::vector<double>
   cracks_pvd_->add(t, crel);
 }
 
-void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
+void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e, const FractureDegree& fd,
+                              const std::vector<double>& region_degree,
                               const std::vector<std::int32_t>& monitor_blocks) {
   for (std::size_t k = 0; k < monitor_blocks.size(); ++k) {
     const MonitorSample s = sample_block(m, monitor_blocks[k]);
@@ -308,11 +309,10 @@ void RunWriter::write_history(const Model& m, double t, const EnergyBalance& e,
                t, e.kinetic, e.block_strain, e.spring_strain, e.external_work, e.gravity_work,
                e.explosive_work, e.damping, e.fracture, e.initial, e.insertion, e.contact_strain,
                e.contact_friction, e.products_kinetic, e.balance, e.error);
-  const FractureDegree fd = fracture_degree(m);
   std::fprintf(fracture_, "%.9g,%.9g,%.9g,%.9g,%.9g,%lld,%lld", t, fd.area, fd.tensile, fd.shear,
                fd.count, static_cast<long long>(fd.broken), static_cast<long long>(fd.total));
   if (!fracture_regions_.empty())
-    for (double d : fracture_degree_by_region(m).degree) std::fprintf(fracture_, ",%.9g", d);
+    for (double d : region_degree) std::fprintf(fracture_, ",%.9g", d);
   std::fputs("\n", fracture_);
 }
 

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "cdem/analysis/damage.hpp"
 #include "cdem/core/state_archive.hpp"
 #include "cdem/io/case.hpp"
 #include "cdem/io/vtu.hpp"
@@ -52,8 +53,10 @@ class RunWriter {
   void write_reactions(double t, const std::vector<std::string>& face_sets, const std::vector<Vec3>& force);
   // The regions of fracture.csv's per-region columns (region indices) and their column names.
   const std::vector<std::int32_t>& fracture_regions() const { return fracture_regions_; }
-  void write_history(const Model& m, double t, const EnergyBalance& e,
-                     const std::vector<std::int32_t>& monitor_blocks);
+  // One history sample: energy.csv, fracture.csv (fd, and per region of fracture_regions() its
+  // degree), monitors.csv (the monitor blocks' state in m).
+  void write_history(const Model& m, double t, const EnergyBalance& e, const FractureDegree& fd,
+                     const std::vector<double>& region_degree, const std::vector<std::int32_t>& monitor_blocks);
   void flush();
   // Flushes every history and throws std::runtime_error naming the file when a write failed
   // (a full disk): the run then stops with that message.

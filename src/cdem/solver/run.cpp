@@ -242,10 +242,24 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   if (out && !rank_part.empty()) out->write_partition(m, rank_part);
   // reactions.csv (constrained face sets)
   ReactionMeter reactions(m, c.boundaries, c.gravity, c.path);
-  // (the halo stage gathers their velocities before a sampled step: ascending, without repeats)
+  // What a history sample of the halo stage gathers besides its exact sums (ascending, without
+  // repeats): the monitor blocks' stress; the velocities, positions and forces of their nodes and
+  // of the nodes the reactions read, and those nodes' vertex clusters (tied mode); and before a
+  // sampled step, the velocities the reactions keep.
   std::vector<std::int32_t> reaction_nodes = reactions.watched_nodes();
-  std::sort(reaction_nodes.begin(), reaction_nodes.end());
-  reaction_nodes.erase(std::unique(reaction_nodes.begin(), reaction_nodes.end()), reaction_nodes.end());
+  auto ascending = [](std::vector<std::int32_t>& v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+  };
+  ascending(reaction_nodes);
+  std::vector<std::int32_t> sample_blocks = monitors, sample_nodes = reaction_nodes, sample_vertices;
+  ascending(sample_blocks);
+  for (auto b : sample_blocks)
+    for (auto n = m.block_first_node[b]; n < m.block_first_node[b + 1]; ++n) sample_nodes.push_back(n);
+  ascending(sample_nodes);
+  if (m.tied)
+    for (auto n : reaction_nodes) sample_vertices.push_back(m.node_vertex[static_cast<std::size_t>(n)]);
+  ascending(sample_vertices);
   const double e_floor = energy_floor(m);
   // the interfaces' booked dissipation's peak so far (after a restart: from the state's)
   double fracture_peak = -std::numeric_limits<double>::infinity();
@@ -353,30 +367,40 @@ RunResult run_case(const Case& c, const RunOptions& options) {
     if (rk.size > 1) flags = max_over_ranks(flags);
     const int sig = static_cast<int>(flags / 2);
     const bool wall_checkpoint = (flags & 1) != 0;
+    // The halo stage: the whole model's state where the loop reads all of it (fields,
+    // checkpoint, end or stop); at a history sample only what it reads besides its exact sums;
+    // and with reactions to measure, before a sampled step the velocities they keep.
+    bool whole_state = !halo;
     if (halo) {
-      // The whole model's state where the loop reads it: this step's samples, fields, checkpoint,
-      // end or stop; and with reactions to measure, before a sampled step the velocities they
-      // read.
       const Simulation& part_sim = *halo->sim;
       const bool next_hist_due = !reactions.empty() && (part_sim.time() >= next_hist - 0.5 * dt || k + 2 == steps_limit);
-      if (hist || field || k + 1 == steps_limit || sig != 0 || wall_checkpoint ||
-          (c.checkpoint_interval > 0 && part_sim.time() >= next_ckpt - 0.5 * dt))
+      whole_state = field || k + 1 == steps_limit || sig != 0 || wall_checkpoint ||
+                    (c.checkpoint_interval > 0 && part_sim.time() >= next_ckpt - 0.5 * dt);
+      if (whole_state) {
         sim.gather_parts(part_sim, &halo->uplift.per_node(), &uplift.per_node());
-      else
+      } else {
         sim.follow_clock(part_sim);
-      if (next_hist_due) sim.gather_velocities(part_sim, reaction_nodes);
+        if (hist) sim.gather_sample(part_sim, sample_blocks, sample_nodes, sample_vertices, false);
+      }
+      if (next_hist_due) sim.gather_sample(part_sim, {}, reaction_nodes, {}, true);
     }
     if (const std::string msg = governor.after_step(elapsed(step0)); !msg.empty() && !opt.quiet)
       spdlog::info("{}", msg);
     if (!halo) uplift.update(m);
     if (hist) {
-      last = sim.energy();
+      // (the halo stage: the sums of each rank's part, reduced exactly over the ranks)
+      const Simulation& summed = halo ? *halo->sim : sim;
+      const Simulation::OwnMasks own = summed.own_masks();
+      const SumReducer* reducer = halo ? rank_reducer() : nullptr;
+      last = summed.energy();
+      const FractureDegree fd = fracture_degree(summed.model(), own.iface, reducer);
+      const RegionFracture fr = fracture_degree_by_region(summed.model(), own.iface, reducer);
       // The ranks' states are the same bits (ranks.hpp): checked at each sample.
       if (rk.size > 1 && !same_over_ranks(energy_bits(last)))
         throw std::runtime_error(fmt::format("the ranks' states differ at step {} (t = {:.6g} s): "
                                              "a defect of the distributed run; please report it",
                                              k, t_state));
-      if (out) out->write_history(m, t_state, last, monitors);
+      if (out) out->write_history(m, t_state, last, fd, fr.degree, monitors);
       uplift.sample_monitors(m, monitors, t_state);
       if (!reactions.empty()) {
         reactions.after_step(m, dt, t_state + 0.5 * dt);
@@ -390,6 +414,13 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       fracture_peak = std::max(fracture_peak, last.fracture);
       res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, c.contact_energy_limit,
                                       c.interface_energy_limit, fracture_peak, t_state, e_floor);
+      if (!res.diagnosis.empty() && !whole_state) {
+        // (every rank found it from the same sums: the whole state for the message and the fields)
+        sim.gather_parts(*halo->sim, &halo->uplift.per_node(), &uplift.per_node());
+        whole_state = true;
+        res.diagnosis = check_stability(sim, last, c.energy_blowup_factor, c.contact_energy_limit,
+                                        c.interface_energy_limit, fracture_peak, t_state, e_floor);
+      }
       if (!res.diagnosis.empty()) {
         if (out) {
           out->write_fields(m, t_state, &uplift.per_node(), gas_on_cracks());

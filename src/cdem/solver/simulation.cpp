@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "cdem/core/error.hpp"
+#include "cdem/core/exact_sum.hpp"
 #include "cdem/parallel/ranks.hpp"
 #include "cdem/physics/block_forces.hpp"
 #include "cdem/physics/integrate.hpp"
@@ -432,36 +433,67 @@ std::size_t Simulation::solver_bytes() const {
 }
 
 EnergyBalance Simulation::energy() const {
+  // Each term once, summed exactly (core/exact_sum.hpp): the same bits for any order and, in the
+  // halo stage of a distributed run, for any split of the model among the ranks: a part lists
+  // the terms of the entities it owns (own_masks) and the sums are reduced over the ranks.
+  enum : std::size_t { kKinetic, kDamping, kLastDamping, kBlockStrain, kSpringStrain, kFracture, kGravity, kProducts, kSums };
+  const OwnMasks own = own_masks();
+  auto mine = [](const std::uint8_t* mask, std::size_t i) { return mask == nullptr || mask[i] != 0; };
+  const bool after_step = steps_ > 0;
+  const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
+    for (std::size_t v = 0; v < vtx_ke_.size(); ++v) {
+      if (!mine(own.vertex, v)) continue;
+      put(kKinetic, vtx_ke_[v]);
+      if (!vtx_dissipated_.empty()) put(kDamping, vtx_dissipated_[v]);
+      if (after_step && !vtx_cke_.empty()) put(kLastDamping, vtx_cke_[v]);
+    }
+    for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
+      if (!mine(own.block, b)) continue;
+      if (!ke_.empty()) put(kKinetic, ke_[b]);
+      if (!block_dissipated_.empty()) put(kDamping, block_dissipated_[b]);
+      if (after_step && !cke_.empty()) put(kLastDamping, cke_[b]);
+      put(kBlockStrain, m_.strain_energy[b]);
+      // The products' kinetic energy, in the same measure as `kinetic`: each block's (untied) or
+      // cluster's (tied) leapfrog kinetic energy, times the products' share of its mass. A tied
+      // cluster moves as one: its share is the products' mass in it over its mass.
+      const double share = m_.block_materials[m_.block_material[b]].products_fraction();
+      if (!(share > 0)) continue;
+      if (!m_.tied) {
+        put(kProducts, share * ke_[b]);
+        continue;
+      }
+      for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n) {
+        const auto v = m_.node_vertex[n];
+        double mv = 0;
+        for (auto q = m_.vtx_offset[v]; q < m_.vtx_offset[v + 1]; ++q) mv += m_.mass[m_.vtx_nodes[q]];
+        put(kProducts, share * m_.mass[n] / mv * vtx_ke_[v]);
+      }
+    }
+    const auto np = static_cast<std::size_t>(m_.springs_per_iface);
+    for (std::size_t s = 0; s < m_.n_springs(); ++s) {
+      if (!mine(own.iface, s / np)) continue;
+      put(kFracture, m_.sp_dissipated[s]);
+      if (m_.sp_state[s] != kReleased)
+        put(kSpringStrain, 0.5 * m_.sp_fn[s] * m_.sp_fn[s] / m_.sp_kn[s] + 0.5 * dot(m_.sp_fs[s], m_.sp_fs[s]) / m_.sp_ks[s]);
+    }
+    for (std::size_t n = 0; n < m_.n_nodes(); ++n)
+      if (mine(own.node, n)) put(kGravity, m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n)));
+  }, halo_ ? rank_reducer() : nullptr);
   EnergyBalance e;
-  if (m_.tied) {
-    for (double k : vtx_ke_) e.kinetic += k;
-    for (double d : vtx_dissipated_) e.damping += d;
-  } else {
-    for (double k : ke_) e.kinetic += k;
-  }
-  for (double s : m_.strain_energy) e.block_strain += s;
-  for (std::size_t s = 0; s < m_.n_springs(); ++s) {
-    if (m_.sp_state[s] == kReleased) continue;
-    e.spring_strain += 0.5 * m_.sp_fn[s] * m_.sp_fn[s] / m_.sp_kn[s] +
-                       0.5 * dot(m_.sp_fs[s], m_.sp_fs[s]) / m_.sp_ks[s];
-    e.fracture += m_.sp_dissipated[s];
-  }
-  for (std::size_t s = 0; s < m_.n_springs(); ++s)
-    if (m_.sp_state[s] == kReleased) e.fracture += m_.sp_dissipated[s];
-  for (double d : block_dissipated_) e.damping += d;
-  for (std::size_t n = 0; n < m_.n_nodes(); ++n) {
-    e.gravity_work += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n));
-  }
+  e.kinetic = sum[kKinetic];
+  e.damping = sum[kDamping];
+  e.block_strain = sum[kBlockStrain];
+  e.spring_strain = sum[kSpringStrain];
+  e.fracture = sum[kFracture];
+  e.gravity_work = sum[kGravity];
   // The accumulated works include all of the last step, F(n) . v_mid dt with
   // v_mid dt = (x(n+1) - x(n-1)) / 2; the state is at t_n (x(n), and the kinetic energy
-  // 1/2 m v(n-1/2).v(n+1/2)), so the part after t_n, F(n) . v(n+1/2) dt / 2 (last_*_), is taken
-  // back out. With the leapfrog kinetic energy this makes the balance exact for a linear
-  // system under any loads (docs/theory.md "Energy balance"): by summation by parts the
-  // central-difference scheme conserves E*(n) - sum_k<n F(k) . v_mid(k) dt - F(n) . v(n-1/2) dt/2.
-  double last_damping = 0;
-  if (steps_ > 0)
-    for (double ck : (m_.tied ? vtx_cke_ : cke_)) last_damping += ck;
-  e.damping += w_absorbed_ - last_absorbed_ - last_damping;
+  // 1/2 m v(n-1/2).v(n+1/2)), so the part after t_n, F(n) . v(n+1/2) dt / 2 (last_*_, and the
+  // damping's c ke terms), is taken back out. With the leapfrog kinetic energy this makes the
+  // balance exact for a linear system under any loads (docs/theory.md "Energy balance"): by
+  // summation by parts the central-difference scheme conserves
+  // E*(n) - sum_k<n F(k) . v_mid(k) dt - F(n) . v(n-1/2) dt/2.
+  e.damping += w_absorbed_ - last_absorbed_ - sum[kLastDamping];
   e.damping -= w_sdamp_ - last_sdamp_;  // the damping forces' work is negative
   e.external_work = w_boundary_ - last_boundary_;
   e.explosive_work = w_explosive_ - last_explosive_;
@@ -469,7 +501,7 @@ EnergyBalance Simulation::energy() const {
   e.insertion = w_insert_;
   e.contact_strain = contact_energy(contact_);
   e.contact_friction = contact_dissipated(contact_);
-  e.products_kinetic = products_kinetic();
+  e.products_kinetic = sum[kProducts];
   const double stored = e.mechanical() + e.damping + e.fracture + e.contact_friction;
   const double input =
       e.initial + e.external_work + e.gravity_work + e.explosive_work + e.insertion;
@@ -477,28 +509,6 @@ EnergyBalance Simulation::energy() const {
   const double scale = std::max({std::abs(input), e.mechanical(), 1e-300});
   e.error = std::abs(e.balance) / scale;
   return e;
-}
-
-double Simulation::products_kinetic() const {
-  // In the same measure as `kinetic`: each block's (untied) or cluster's (tied) leapfrog kinetic
-  // energy, times the products' share of its mass. A tied cluster moves as one: its share is
-  // the products' mass in it over its mass.
-  double k = 0;
-  for (std::size_t b = 0; b < m_.n_blocks(); ++b) {
-    const double share = m_.block_materials[m_.block_material[b]].products_fraction();
-    if (!(share > 0)) continue;
-    if (!m_.tied) {
-      k += share * ke_[b];
-      continue;
-    }
-    for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n) {
-      const auto v = m_.node_vertex[n];
-      double mv = 0;
-      for (auto q = m_.vtx_offset[v]; q < m_.vtx_offset[v + 1]; ++q) mv += m_.mass[m_.vtx_nodes[q]];
-      k += share * m_.mass[n] / mv * vtx_ke_[v];
-    }
-  }
-  return k;
 }
 
 void Simulation::io_state(StateArchive& ar) {

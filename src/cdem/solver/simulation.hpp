@@ -114,10 +114,16 @@ class Simulation {
   const ContactSet& contact() const { return contact_; }
   ContactSet& contact() { return contact_; }
 
-  // Energy terms at the last sampled step (call step(true) first for the kinetic part).
+  // Energy terms at the last sampled step (call step(true) first for the kinetic part). Its sums
+  // are exact (core/exact_sum.hpp): of a part (is_part), over the whole model, reduced over the
+  // ranks (every rank calls it at once), with the bits one process gets.
   EnergyBalance energy() const;
-  // The charge's products' share of the kinetic energy (EnergyBalance::products_kinetic).
-  double products_kinetic() const;
+  // The entities whose terms this Simulation's sums list: a part's own blocks, nodes, interfaces
+  // and vertices (per local entity, 1 own); null masks (every entity) for a whole model.
+  struct OwnMasks {
+    const std::uint8_t *block = nullptr, *node = nullptr, *iface = nullptr, *vertex = nullptr;
+  };
+  OwnMasks own_masks() const;
 
   // Bytes of the solver's own arrays (per-block energies, boundary-condition arrays), beyond the
   // Model's.
@@ -157,11 +163,21 @@ class Simulation {
   // `local` is this rank's part. `extra_local` / `extra_whole`: a per-node array carried along
   // (the uplift maxima), local and whole; may be null.
   void gather_parts(const Simulation& local, const std::vector<double>* extra_local, std::vector<double>* extra_whole);
-  // The velocities of the whole model's `nodes` (ascending) from the part that owns each, on every
-  // rank at once (one small gather: what the reactions read before a sampled step).
-  void gather_velocities(const Simulation& local, const std::vector<std::int32_t>& nodes);
-  // The time and step count of the part `local` (between gathers: the run loop's clock).
-  void follow_clock(const Simulation& local) { t_ = local.t_, steps_ = local.steps_; }
+  // On the whole model's Simulation, on every rank at once (one small gather, from the part that
+  // owns each): the stress of `blocks`, the velocity of `nodes` (and with !velocities_only their
+  // positions and forces), and the clusters (tied mode: node lists and runs) of `vertices`; each
+  // list ascending, without repeats. What a history sample reads besides the exact sums: the
+  // monitors, and the reactions (their velocities before a sampled step, then after it).
+  void gather_sample(const Simulation& local, const std::vector<std::int32_t>& blocks,
+                     const std::vector<std::int32_t>& nodes, const std::vector<std::int32_t>& vertices,
+                     bool velocities_only);
+  // The time and step count of the part `local`, and its inverted blocks' count and first (the
+  // parts form them over the whole model): between gathers, the run loop's clock and what a
+  // sample's stability check reads.
+  void follow_clock(const Simulation& local) {
+    t_ = local.t_, steps_ = local.steps_;
+    inverted_ = local.inverted_, first_inverted_ = local.first_inverted_;
+  }
 
  private:
   // The block kernel's results of every rank's blocks to every rank (forces, stress, strain

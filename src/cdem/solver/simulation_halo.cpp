@@ -12,6 +12,7 @@
 // and checkpoints: gather_parts fills it from the parts' own entities when the loop reads it.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "cdem/parallel/halo.hpp"
@@ -163,6 +164,13 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
     if (j != bc_.loads.size()) throw std::logic_error("make_part: the part has load facets the whole lacks");
   }
   halo_ = std::move(h);
+  e_initial_ = whole.e_initial_;  // (a part's own set-up summed its part, ghosts included)
+}
+
+Simulation::OwnMasks Simulation::own_masks() const {
+  if (!halo_) return {};
+  const HaloIndex& h = *halo_;
+  return {h.own_block.data(), h.own_node.data(), h.own_iface.data(), h.own_vertex.empty() ? nullptr : h.own_vertex.data()};
 }
 
 void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
@@ -463,26 +471,63 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
   }
 }
 
-void Simulation::gather_velocities(const Simulation& local, const std::vector<std::int32_t>& nodes) {
+void Simulation::gather_sample(const Simulation& local, const std::vector<std::int32_t>& blocks,
+                               const std::vector<std::int32_t>& nodes, const std::vector<std::int32_t>& vertices,
+                               bool velocities_only) {
   const HaloIndex& h = *local.halo_;
+  const Model& l = local.m_;
+  auto local_of = [](const std::vector<std::int32_t>& map, std::int32_t g) {
+    const auto it = std::lower_bound(map.begin(), map.end(), g);
+    if (it == map.end() || *it != g) throw std::logic_error("gather_sample: an own entity the part lacks");
+    return static_cast<std::size_t>(it - map.begin());
+  };
+  auto block_owner = [&](std::size_t b) { return h.part[b]; };
+  auto node_owner = [&](std::int32_t n) { return block_owner(m_.node_block(static_cast<std::size_t>(n))); };
+  // (a vertex's owner: the part of the block of its lowest node, vertex_owner)
+  auto vertex_owner_of = [&](std::int32_t v) {
+    std::int32_t low = std::numeric_limits<std::int32_t>::max();
+    for (auto k = m_.vtx_offset[v]; k < m_.vtx_offset[v + 1]; ++k) low = std::min(low, m_.vtx_nodes[k]);
+    return node_owner(low);
+  };
   std::vector<double> buf;
   Put put{buf};
-  auto owner = [&](std::int32_t n) { return h.part[static_cast<std::size_t>(m_.node_block(static_cast<std::size_t>(n)))]; };
+  for (auto b : blocks)
+    if (block_owner(static_cast<std::size_t>(b)) == h.rank) put(l.stress[local_of(h.block, b)]);
   for (auto n : nodes) {
-    if (owner(n) != h.rank) continue;
-    const auto it = std::lower_bound(h.node.begin(), h.node.end(), n);
-    put(local.m_.v[static_cast<std::size_t>(it - h.node.begin())]);
+    if (node_owner(n) != h.rank) continue;
+    const std::size_t ln = local_of(h.node, n);
+    put(l.v[ln]);
+    if (!velocities_only) put(l.x[ln]), put(l.f[ln]);
+  }
+  for (auto v : vertices) {
+    if (vertex_owner_of(v) != h.rank) continue;
+    const std::size_t lv = local_of(h.vertex, v);
+    for (auto k = l.vtx_offset[lv]; k < l.vtx_offset[lv + 1]; ++k) {
+      put(static_cast<double>(h.node[static_cast<std::size_t>(l.vtx_nodes[k])]));
+      put(l.vtx_run[k]);
+    }
   }
   std::vector<double> all;
   std::vector<std::int64_t> at;
   gather_all(buf, all, at);
-  std::vector<const double*> from(static_cast<std::size_t>(h.ranks));
-  for (int r = 0; r < h.ranks; ++r) from[static_cast<std::size_t>(r)] = all.data() + at[r];
+  std::vector<Get> from;
+  for (int r = 0; r < h.ranks; ++r) from.push_back(Get{all.data() + at[r]});
+  for (auto b : blocks) m_.stress[static_cast<std::size_t>(b)] = from[static_cast<std::size_t>(block_owner(static_cast<std::size_t>(b)))].s6();
   for (auto n : nodes) {
-    const double*& p = from[static_cast<std::size_t>(owner(n))];
-    m_.v[static_cast<std::size_t>(n)] = {p[0], p[1], p[2]};
-    p += 3;
+    Get& get = from[static_cast<std::size_t>(node_owner(n))];
+    const auto gn = static_cast<std::size_t>(n);
+    m_.v[gn] = get.v3();
+    if (!velocities_only) m_.x[gn] = get.v3(), m_.f[gn] = get.v3();
   }
+  for (auto v : vertices) {
+    Get& get = from[static_cast<std::size_t>(vertex_owner_of(v))];
+    for (auto k = m_.vtx_offset[v]; k < m_.vtx_offset[v + 1]; ++k) {
+      m_.vtx_nodes[k] = static_cast<std::int32_t>(get.d());
+      m_.vtx_run[k] = static_cast<std::uint8_t>(get.d());
+    }
+  }
+  for (int r = 0; r < h.ranks; ++r)
+    if (from[static_cast<std::size_t>(r)].p != all.data() + at[r + 1]) throw std::logic_error("gather_sample: the parts' records do not match");
 }
 
 }  // namespace cdem

@@ -1,6 +1,6 @@
 // Order-free sums (core/exact_sum.hpp): the same bits in any order and any split among ranks
-// (the ranks simulated here by threads meeting at a barrier, as MPI_Allreduce would), exact where
-// the true sum is a double, and within the stated bound of it otherwise.
+// (the ranks simulated here by threads meeting at a barrier, as MPI_Allreduce would), and the
+// true sum rounded once to the nearest double.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,7 +27,7 @@ double sum_of(const std::vector<double>& x) {
 }
 
 // Threads as ranks: each reduction puts every thread's values in its slot, waits for all, and
-// takes the max or the sum of the slots.
+// takes the sum of the slots.
 struct World {
   explicit World(int n) : ranks(n), bar(n), slot(static_cast<std::size_t>(n)) {}
   int ranks;
@@ -37,17 +37,13 @@ struct World {
 World* g_world = nullptr;
 thread_local int t_rank = 0;
 
-template <bool Max>
 void reduce(std::int64_t* v, std::size_t n) {
   World& w = *g_world;
   w.slot[static_cast<std::size_t>(t_rank)].assign(v, v + n);
   w.bar.arrive_and_wait();
   for (std::size_t i = 0; i < n; ++i) {
-    std::int64_t a = w.slot[0][i];
-    for (int r = 1; r < w.ranks; ++r) {
-      const std::int64_t b = w.slot[static_cast<std::size_t>(r)][i];
-      a = Max ? std::max(a, b) : a + b;
-    }
+    std::int64_t a = 0;
+    for (int r = 0; r < w.ranks; ++r) a += w.slot[static_cast<std::size_t>(r)][i];
     v[i] = a;
   }
   w.bar.arrive_and_wait();
@@ -60,8 +56,7 @@ std::vector<std::vector<double>> split_sum(const std::vector<double>& x, int ran
   g_world = &w;
   SumReducer r;
   r.ranks = ranks;
-  r.max = reduce<true>;
-  r.sum = reduce<false>;
+  r.sum = reduce;
   std::vector<std::vector<double>> out(static_cast<std::size_t>(ranks));
   std::vector<std::thread> th;
   for (int q = 0; q < ranks; ++q)
@@ -116,9 +111,9 @@ TEST(ExactSum, SameBitsForAnySplitAmongRanks) {
   }
 }
 
-TEST(ExactSum, ExactWhenTheTermsFitTheScale) {
-  // integers below 2^40 times 2^-20: the scale keeps every bit (S = 125 - 20 - 17 >= 20), so the
-  // result is the true sum (an integer below 2^57 times 2^-20) rounded once to a double
+TEST(ExactSum, TrueSumOfIntegers) {
+  // integers below 2^40 times 2^-20: the result is the true sum (an integer below 2^57 times
+  // 2^-20, summed here in 128-bit integers) rounded once to a double
   std::mt19937_64 rng(4);
   std::uniform_int_distribution<std::int64_t> d(-(std::int64_t{1} << 40), std::int64_t{1} << 40);
   std::vector<double> x(100000);
@@ -134,24 +129,36 @@ TEST(ExactSum, ExactWhenTheTermsFitTheScale) {
 TEST(ExactSum, CancellationAndSpecialValues) {
   // a plain sum loses the 1 to rounding; the exact one keeps it
   EXPECT_EQ(sum_of({1e20, 1.0, -1e20}), 1.0);
+  EXPECT_EQ(sum_of({-1e20, -1.0, 1e20}), -1.0);
   EXPECT_EQ(sum_of({}), 0.0);
   EXPECT_EQ(sum_of({0.0, -0.0}), 0.0);
   EXPECT_EQ(sum_of({-2.5}), -2.5);
   EXPECT_TRUE(std::isnan(sum_of({1.0, std::numeric_limits<double>::quiet_NaN()})));
   EXPECT_TRUE(std::isnan(sum_of({1.0, std::numeric_limits<double>::infinity()})));
-  // the extremes of the range: the largest doubles sum without overflow (and a term far below
-  // the largest, 1 against 2^1024, is under the scale's resolution: truncated, as the bound says)
-  const double big = std::numeric_limits<double>::max();
+  // the ends of the range: the largest doubles cancel exactly around the smallest one
+  const double big = std::numeric_limits<double>::max(), tiny = std::numeric_limits<double>::denorm_min();
+  EXPECT_EQ(sum_of({big, tiny, -big}), tiny);
   EXPECT_EQ(sum_of({big, 0.5 * big, -big}), 0.5 * big);
-  EXPECT_EQ(sum_of({big, 1.0, -big}), 0.0);
-  const double tiny = std::numeric_limits<double>::denorm_min();
   EXPECT_EQ(sum_of({tiny, tiny, tiny}), 3 * tiny);
+  EXPECT_EQ(sum_of({big, big}), std::numeric_limits<double>::infinity());  // (beyond the range)
+}
+
+TEST(ExactSum, RoundsOnceToNearestEven) {
+  const double u = 0x1p-52;  // the spacing of the doubles at 1
+  // half an ulp: a tie, to the even neighbour (1 below, 1 + 2u above)
+  EXPECT_EQ(sum_of({1.0, 0.5 * u}), 1.0);
+  EXPECT_EQ(sum_of({1.0 + u, 0.5 * u}), 1.0 + 2 * u);
+  // just above half an ulp (the excess 200 bits further down): up (a plain running sum of these
+  // three gives 1: it rounds the tie first)
+  EXPECT_EQ(sum_of({1.0, 0.5 * u, 0x1p-250}), 1.0 + u);
+  // just below: down
+  EXPECT_EQ(sum_of({1.0, 0.5 * u, -0x1p-250}), 1.0);
+  EXPECT_EQ(sum_of({-1.0, -0.5 * u, -0x1p-250}), -1.0 - u);
 }
 
 TEST(ExactSum, ExactOverAWideRange) {
   // 53-bit integers times 2^j, j from -40 to 0: multiples of 2^-40 spanning 93 bits, with
-  // opposite signs (a plain sum cancels and rounds). The scale keeps every bit (S = 125 - 53 -
-  // 17 = 55 >= 40): the result is the true sum rounded once.
+  // opposite signs (a plain sum cancels and rounds): the result is the true sum rounded once.
   std::mt19937_64 rng(5);
   std::uniform_int_distribution<std::int64_t> m(-(std::int64_t{1} << 53) + 1, (std::int64_t{1} << 53) - 1);
   std::uniform_int_distribution<int> j(-40, 0);

@@ -142,6 +142,18 @@ for c in P2 H3 B3; do
   [ "$(mode "$TMP/h_${c}s_3")" = halo ] || fail "$c in the springs mode on 3 ranks: not the halo stage"
   unset -n args
 done
+# stiffness-proportional damping (its work: per block and per node terms in the step's exact sums)
+for n in 1 3; do
+  run "$n" "$TMP/h_H3d_$n" "${H3[@]}" --set material.0.stiffness_damping=2e-7 2> "$TMP/log_h" ||
+    { cat "$TMP/log_h"; fail "3D box with stiffness damping, halo, on $n ranks"; }
+done
+same "$TMP/h_H3d_1" "$TMP/h_H3d_3"
+[ "$(mode "$TMP/h_H3d_3")" = halo ] || fail "stiffness damping on 3 ranks: not the halo stage"
+"$PY" - "$TMP/h_H3_1/energy.csv" "$TMP/h_H3d_1/energy.csv" <<'EOF' || fail "stiffness damping: no work booked"
+import csv, sys
+last = [list(csv.DictReader(open(p)))[-1] for p in sys.argv[1:]]
+assert float(last[1]["damping"]) > float(last[0]["damping"]) + 1e-3 * abs(float(last[0]["damping"])), last
+EOF
 # the replicated stage asked for: the same bits
 "${MPIRUN[@]}" -np 2 "$BIN" run "${H3[@]}" -o "$TMP/h_rep" -t 1 --fixed-threads -q --ranks-mode replicated 2> "$TMP/log_h" ||
   { cat "$TMP/log_h"; fail "3D box, --ranks-mode replicated"; }
@@ -182,7 +194,7 @@ EOF
 "$BIN" check "${B3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the bar box's stage"
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
   fail "check --parts: the 2D bar case's stage (contact)"
-echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box) continued on 3 ranks"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box) continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets

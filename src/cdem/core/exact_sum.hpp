@@ -1,28 +1,24 @@
 // Sums whose bits depend neither on the order of their terms nor on how the terms are split
-// among ranks (docs/parallel.md "Exact sums"): the energy balance and the fracture degree of a
-// history sample, formed by each rank over what it owns and reduced by two collectives, with the
-// bits one process gets.
+// among ranks (docs/parallel.md "Exact sums"): the step's works, and a history sample's energy
+// balance and fracture degree, formed by each rank over what it owns and reduced by one
+// collective, with the bits one process gets.
 //
-// Each sum is a fixed-point integer (128 bits) at a scale 2^S common to all its terms: every term
-// is converted once, x 2^S truncated toward zero (exact for all but its bits below 2^-S), and
-// integers add exactly in any order. S is set by the largest term's binary exponent e (|x| <
-// 2^e over every rank) and a bound N on the number of terms (every rank's count times the
-// ranks): S = 125 - e - bits(N), so the sum of N terms stays below 2^125 and fits. The error is
-// at most N 2^-S = 2^(e - 125 + 2 bits(N)) against the largest term: below 2^-70 of it for N up to
-// 2^27, where a double's running sum errs by up to N 2^-53 of the total. The result is the
-// integer rounded once to a double (to nearest), times 2^-S.
+// Each sum is held exactly, as a long fixed-point number (Kulisch's long accumulator, cut into
+// bins): a double x is m 2^(E - 1075) with m its 53-bit integer significand and E its biased
+// exponent (1 for subnormals). It is added, as the 128-bit integer +-m 2^(E mod 32), to bin
+// E / 32 of 64, whose weight is 2^(32 (E / 32) - 1075). A bin takes 2^42 terms before it could
+// overflow (each is below 2^84 and the bin holds up to 2^126); integers add exactly in any order.
+// One pass over the terms; over the ranks, the bins are summed by one MPI_SUM (each bin as three
+// 42-bit limbs in int64, so that up to 2^21 ranks cannot overflow a limb). The bins, carried
+// into 32-bit digits, are the exact sum, rounded once to the nearest double (ties to even; a
+// subnormal result may round twice).
 //
-// A sum with a NaN or infinite term is NaN on every rank. A zero term adds nothing (and -0 is
-// +0: as a plain sum's would be, unless every term is -0).
-//
-// Two passes over the terms: `see` every term (the largest magnitude and the count), then the
-// scales (over the ranks: one max-reduction), then `add` every term, then `result` (over the
-// ranks: one sum-reduction of the integers, carried as three 42-bit limbs in int64 so that a
-// plain MPI_SUM of up to 2^21 ranks cannot overflow). `sum_exactly` runs both passes over a
-// callable that lists the terms.
+// A sum with a NaN or infinite term is NaN. A zero term adds nothing (-0 too: an empty sum, or one
+// of zeros, is +0).
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace cdem {
@@ -30,53 +26,49 @@ namespace cdem {
 // A 128-bit integer (GCC and Clang; __extension__: not ISO C++).
 __extension__ typedef __int128 ExactInt;
 
-// The collectives of a distributed sum: in place over n int64 values, every rank's largest
-// (max) and every rank's total (sum); ranks: how many. null (or one rank): a sum of one process.
+// The collective of a distributed sum: in place over n int64 values, every rank's total
+// (MPI_Allreduce, MPI_SUM); ranks: how many. null (or one rank): a sum of one process.
 struct SumReducer {
-  void (*max)(std::int64_t* v, std::size_t n) = nullptr;
   void (*sum)(std::int64_t* v, std::size_t n) = nullptr;
   int ranks = 1;
 };
 
 class ExactSums {
  public:
+  static constexpr int kBins = 64;
   explicit ExactSums(std::size_t sums = 0) { reset(sums); }
-  void reset(std::size_t sums);
-  std::size_t size() const { return amax_.size(); }
+  void reset(std::size_t sums) {
+    bins_.assign(sums * kBins, 0);
+    bad_.assign(sums, 0);
+  }
+  std::size_t size() const { return bad_.size(); }
 
-  // Pass 1: every term of sum i.
-  void see(std::size_t i, double x) {
-    const double a = x < 0 ? -x : x;
-    if (a > 0) {
-      if (a > amax_[i]) amax_[i] = a;
-      ++count_[i];
-    } else if (!(a == 0)) {
-      bad_[i] = 1;  // NaN
-    }
-  }
-  // Between the passes: the scales, over the ranks with r (one collective).
-  void fix_scales(const SumReducer* r);
-  // Pass 2: every term of sum i, the same as in pass 1.
+  // Adds x to sum i, exactly.
   void add(std::size_t i, double x) {
-    if (!(x != 0) || skip_[i]) return;
-    acc_[i] += static_cast<ExactInt>(x * f1_[i] * f2_[i]);
+    std::uint64_t u;
+    std::memcpy(&u, &x, sizeof u);
+    const auto e = static_cast<unsigned>(u >> 52) & 0x7ffu;
+    if (e == 0x7ffu) {  // NaN, infinity
+      bad_[i] = 1;
+      return;
+    }
+    const std::uint64_t m = (u & ((std::uint64_t{1} << 52) - 1)) | (e ? std::uint64_t{1} << 52 : 0);
+    const unsigned ex = e ? e : 1;
+    const ExactInt v = static_cast<ExactInt>(m) << (ex & 31u);
+    bins_[i * kBins + (ex >> 5)] += (u >> 63) ? -v : v;
   }
-  // The sums, over the ranks with r (one collective).
-  std::vector<double> result(const SumReducer* r);
+  // The sums (over the ranks with r: one collective; every rank gets the same).
+  std::vector<double> result(const SumReducer* r = nullptr);
 
  private:
-  std::vector<double> amax_, f1_, f2_;
-  std::vector<std::int64_t> count_, scale_;
-  std::vector<std::uint8_t> bad_, skip_;
-  std::vector<ExactInt> acc_;
+  std::vector<ExactInt> bins_;
+  std::vector<std::uint8_t> bad_;
 };
 
-// Both passes: terms(put) calls put(i, x) for every term x of sum i, the same terms each time.
+// terms(put) calls put(i, x) for every term x of sum i; the sums, over the ranks with r.
 template <class Terms>
 std::vector<double> sum_exactly(std::size_t sums, Terms&& terms, const SumReducer* r = nullptr) {
   ExactSums s(sums);
-  terms([&s](std::size_t i, double x) { s.see(i, x); });
-  s.fix_scales(r);
   terms([&s](std::size_t i, double x) { s.add(i, x); });
   return s.result(r);
 }

@@ -304,14 +304,14 @@ Projection project(const BlockGraph& g, const PartitionQuality& q, double second
   Projection pr;
   double total = 0;
   for (std::size_t b = 0; b < g.n(); ++b) total += g.vwgt.empty() ? 1.0 : g.vwgt[b];
-  const double add_s = sums.terms * sums.seconds_per_term;
+  const double add_s = (q.parts > 1 ? sums.terms_max : sums.terms) * sums.seconds_per_term;
   const double stages = q.parts > 1 ? std::ceil(std::log2(static_cast<double>(q.parts))) : 0.0;
-  const double gather_s = q.parts > 1 ? 2 * stages * net.latency + 8 * sums.terms / net.bandwidth : 0.0;
-  pr.sums_s = add_s + gather_s;
+  const double reduce_s = q.parts > 1 ? 2 * stages * net.latency : 0.0;
+  pr.sums_s = add_s + reduce_s;
   pr.compute_s = q.stepped_max * seconds_per_unit + add_s;
-  pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth + gather_s;
+  pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth + reduce_s;
   pr.ratio = pr.comm_s > 0 ? pr.compute_s / pr.comm_s : 0.0;
-  const double ideal = (total * seconds_per_unit + add_s) / q.parts;
+  const double ideal = (total * seconds_per_unit + sums.terms * sums.seconds_per_term) / q.parts;
   pr.efficiency = ideal / (pr.compute_s + pr.comm_s);
   return pr;
 }

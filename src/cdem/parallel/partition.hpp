@@ -106,19 +106,20 @@ struct Network {
 };
 // Per step of the busiest part (parallel/halo.hpp, as built; docs/parallel.md):
 //   compute = its stepped weight (own + ghost blocks) x (seconds per weight unit)
-//             + the whole model's sum terms x seconds per term (every rank adds them all, in order);
+//             + its own terms of the step's sums x seconds per term (exact sums, two passes:
+//             Simulation::step_sums);
 //   comm    = its messages x latency + its bytes / bandwidth
-//             + 2 collectives x ceil(log2 parts) x latency + the sum terms' bytes / bandwidth
-//               (the terms are gathered whole by every rank);
+//             + 2 collectives (MPI_Allreduce of a few int64 per sum) x ceil(log2 parts) x latency;
 // efficiency without overlap = compute(1 process) / parts / (compute + comm), where one process
-// steps the model's weight and adds the same terms.
+// steps the model's weight and sums all the terms.
 struct StepSums {
-  double terms = 0;                // doubles gathered per step over the whole model (part_sums)
-  double seconds_per_term = 1e-9;  // to add one of them (a fused multiply-add chain)
+  double terms = 0;                // terms per step over the whole model
+  double terms_max = 0;            // the busiest part's own terms (for the partition projected)
+  double seconds_per_term = 2e-9;  // to sum one of them exactly (measured: bench --partition)
 };
 struct Projection {
   double compute_s = 0, comm_s = 0, ratio = 0, efficiency = 0;
-  double sums_s = 0;  // of compute_s + comm_s: the gathered sums (their bytes, collectives, adds)
+  double sums_s = 0;  // of compute_s + comm_s: the step's sums (the busiest part's terms, the collectives)
 };
 Projection project(const BlockGraph& g, const PartitionQuality& q, double seconds_per_unit,
                    const Network& net, const StepSums& sums = {});

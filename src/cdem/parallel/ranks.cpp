@@ -195,9 +195,6 @@ const SumReducer* rank_reducer() {
   if (g_ranks.size == 1) return nullptr;
   static SumReducer r;
   r.ranks = g_ranks.size;
-  r.max = [](std::int64_t* v, std::size_t n) {
-    MPI_Allreduce(MPI_IN_PLACE, v, static_cast<int>(n), MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
-  };
   r.sum = [](std::int64_t* v, std::size_t n) {
     MPI_Allreduce(MPI_IN_PLACE, v, static_cast<int>(n), MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   };

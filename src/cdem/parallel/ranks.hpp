@@ -67,8 +67,8 @@ void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<
 void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first);
 // The largest of `v` over the ranks.
 std::int64_t max_over_ranks(std::int64_t v);
-// The collectives of exact_sum.hpp's sums over the ranks (MPI_Allreduce, MPI_MAX and MPI_SUM of
-// int64); null with one rank.
+// The collective of exact_sum.hpp's sums over the ranks (MPI_Allreduce, MPI_SUM of int64); null
+// with one rank.
 const SumReducer* rank_reducer();
 // True when `h` is the same on every rank (a check that the ranks' states agree).
 bool same_over_ranks(std::uint64_t h);

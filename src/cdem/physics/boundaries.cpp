@@ -153,31 +153,20 @@ void boundary_forces(Model& m, Boundaries& b, double t) {
   }
 }
 
-double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after,
-                         std::vector<double>* terms) {
-  double w = 0, wa = 0;
-  const double h = 0.5 * dt;
-  if (terms) terms->clear();
+void apply_constraints(Model& m, Boundaries& b, double t, double dt, std::vector<double>& terms) {
+  terms.clear();
   for (const auto& c : b.constraints) {
     Vec3& v = m.v[c.node];
     const Vec3 vfree = v;
     v = apply_one(b, c, v, t);
     const Vec3 reaction = (m.mass[c.node] / dt) * (v - vfree);
-    // (each product with dt fused into its sum, one rounding, written out: the sums can then be
-    // formed again from the terms, by a distributed run's ranks, to the same bits)
-    const double mid = dot(reaction, 0.5 * (b.v_old[c.slot] + v)), now = dot(reaction, v);
-    w = std::fma(mid, dt, w);
-    wa = std::fma(h, now, wa);
-    if (terms) terms->insert(terms->end(), {mid, now});
+    terms.insert(terms.end(), {dot(reaction, 0.5 * (b.v_old[c.slot] + v)), dot(reaction, v)});
   }
-  if (after) *after = wa;
-  return w;
 }
 
-double load_work(const Model& m, Boundaries& b, double dt, double* absorbed, double* after,
-                 double* absorbed_after) {
+void load_work_terms(const Model& m, Boundaries& b) {
   // Each node's four terms formed in parallel (the velocities were just written by every
-  // thread), then summed serially in node order: the same sums for any thread count.
+  // thread).
   const auto nw = static_cast<std::int64_t>(b.work_nodes.size());
   b.work_terms.resize(4 * static_cast<std::size_t>(nw));
   double* const terms = b.work_terms.data();
@@ -200,20 +189,6 @@ double load_work(const Model& m, Boundaries& b, double dt, double* absorbed, dou
     terms[4 * i + 2] = dot(fl, v1);
     terms[4 * i + 3] = dot(fd, v1);
   }
-  // (each product with dt fused into its sum, one rounding: as the serial loop before 4 Dec 2026
-  // was compiled, -march=native contracting `w += dot(...) * dt`, so the sums keep their bits)
-  double w = 0, d = 0, wa = 0, da = 0;
-  const double h = 0.5 * dt;
-  for (std::int64_t i = 0; i < nw; ++i) {
-    w = std::fma(terms[4 * i], dt, w);
-    d = std::fma(-terms[4 * i + 1], dt, d);
-    wa = std::fma(h, terms[4 * i + 2], wa);
-    da = std::fma(-h, terms[4 * i + 3], da);
-  }
-  if (absorbed) *absorbed = d;
-  if (after) *after = wa;
-  if (absorbed_after) *absorbed_after = da;
-  return w;
 }
 
 }  // namespace cdem

@@ -33,7 +33,7 @@ struct Boundaries {
   std::vector<TimeTable> tables;
   Vec3 gravity{};
   // Energy book-keeping on the (few) boundary nodes: v(n-1/2), so that the work of the step's
-  // load and dashpot forces (summed again from load_force by load_work) uses the mid-step
+  // load and dashpot forces (summed again from load_force by load_work_terms) uses the mid-step
   // velocity (v_old + v_new) / 2.
   std::vector<std::int32_t> work_nodes;
   std::vector<Vec3> v_old;
@@ -42,7 +42,7 @@ struct Boundaries {
   // work_nodes + 1). Every node's force is summed in this order whatever the thread count.
   std::vector<std::int32_t> node_load_offset, node_load_entry;
   std::vector<Vec3> load_force;  // per load facet and node q, the step's force (3 per facet)
-  std::vector<double> work_terms;  // load_work's four terms per work node (grown once)
+  std::vector<double> work_terms;  // load_work_terms's four per work node (grown once)
   // The constraints ordered by node (then by their order in `constraints`): con_node[k] is the
   // node of constraints[con_order[k]] (constrain_velocity's binary search; tied mode).
   std::vector<std::int32_t> con_node, con_order;
@@ -61,17 +61,15 @@ Boundaries prepare_boundaries(const Model& m, const std::vector<BoundaryConditio
 // Adds the pressure and dashpot forces at time t to m.f (and saves v(n-1/2) of boundary nodes).
 void boundary_forces(Model& m, Boundaries& b, double t);
 
-// Velocity constraints on v(n+1/2), prescribed values taken at t (= t_n + dt/2). Returns the
-// work of the constraint reactions over the step, R . v_mid dt with R = m (v_c - v_free) / dt;
-// *after = its part after t_n, 1/2 dt R . v(n+1/2) (Simulation::energy).
-// `terms`, when given, receives per constraint (in order) its two dot products, R . v_mid and
-// R . v(n+1/2), from which the sums are formed: w = fma(., dt, w), after = fma(dt / 2, ., after).
-double apply_constraints(Model& m, Boundaries& b, double t, double dt, double* after,
-                         std::vector<double>* terms = nullptr);
+// Velocity constraints on v(n+1/2), prescribed values taken at t (= t_n + dt/2). `terms` is set,
+// per constraint in order, to the two powers of its reaction R = m (v_c - v_free) / dt: R . v_mid
+// and R . v(n+1/2). The step sums them (Simulation::step_sums): the reactions' work over the
+// step, dt sum R . v_mid, and its part after t_n, dt/2 sum R . v(n+1/2) (Simulation::energy).
+void apply_constraints(Model& m, Boundaries& b, double t, double dt, std::vector<double>& terms);
 
-// Work of the boundary loads over the step (pressure: returned; dashpots: *absorbed, >= 0), and
-// the parts of each after t_n, 1/2 dt F . v(n+1/2) (*after, *absorbed_after).
-double load_work(const Model& m, Boundaries& b, double dt, double* absorbed, double* after,
-                 double* absorbed_after);
+// The boundary loads' powers of the step into b.work_terms, four per work node: the pressure's
+// and the dashpots' F . v_mid, and the same with v(n+1/2) (their parts after t_n). The step sums
+// them: the loads' work dt sum F . v_mid (dashpots: absorbed, >= 0) and the parts after t_n.
+void load_work_terms(const Model& m, Boundaries& b);
 
 }  // namespace cdem

@@ -90,7 +90,6 @@ void HaloBars::load(Model& l, AppliedLoads& out, double t) {
   // 3. the loads on this part: the gas-filled cracks' faces in the whole list's order (a pair load
   // per spring point), then each bound block inflated by its pressure (single loads per node)
   AppliedLoads::Owned& own = out.owned;
-  std::int64_t rp = 0;
   if (cracks_) {
     for (std::size_t k = 0; k < given_.iface.size(); ++k) {
       const auto gi = static_cast<std::size_t>(given_.iface[k]);
@@ -110,13 +109,11 @@ void HaloBars::load(Model& l, AppliedLoads& out, double t) {
           const std::int32_t b = l.sp_b[i * np + q], a = l.sp_a[i * np + q];
           l.f[static_cast<std::size_t>(b)] += f;
           l.f[static_cast<std::size_t>(a)] -= f;
-          if (own_iface_[i]) own.add(rp + q, b, a, f, dot(f, l.v[static_cast<std::size_t>(b)] - l.v[static_cast<std::size_t>(a)]));
+          if (own_iface_[i]) own.add(b, a, f, dot(f, l.v[static_cast<std::size_t>(b)] - l.v[static_cast<std::size_t>(a)]));
         }
       }
-      rp += np;
     }
   }
-  std::int64_t rs = 0;
   for (std::size_t i = 0; i < bars_.elem_block.size(); ++i) {
     const double sigma = bars_.elem_sigma[i];
     if (!(sigma > 0)) continue;
@@ -128,17 +125,11 @@ void HaloBars::load(Model& l, AppliedLoads& out, double t) {
       const bool mine = own_block_[static_cast<std::size_t>(lb)] != 0;
       for (int j = 0; j < nn; ++j) {
         l.f[static_cast<std::size_t>(n0 + j)] += fn[j];
-        if (mine) own.add(rs + j, n0 + j, -1, fn[j], dot(fn[j], l.v[static_cast<std::size_t>(n0 + j)]));
+        if (mine) own.add(n0 + j, -1, fn[j], dot(fn[j], l.v[static_cast<std::size_t>(n0 + j)]));
       }
       for (int k = 0; k < 3; ++k) l.stress[static_cast<std::size_t>(lb)][k] -= sigma;
     }
-    rs += nodes_of(whole_.block_type[static_cast<std::size_t>(bars_.elem_block[i])]);
   }
-  // (the pair loads' places follow the single loads' in the whole record)
-  for (std::size_t k = 0; k < own.at.size(); ++k)
-    if (own.a[k] >= 0) own.at[k] += rs;
-  own.whole_single = rs;
-  own.whole_pairs = rp;
 }
 
 }  // namespace cdem

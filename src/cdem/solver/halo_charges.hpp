@@ -14,8 +14,8 @@
 // topology. Each part applies the loads of that state to its own and ghost blocks: the gas's crack
 // faces (in the whole list's order), then each bound block inflated by its pressure. So its own
 // nodes get the forces one process gives them, bit for bit. The loads' power terms are summed
-// over the whole model in its record's order by the step's sums (Simulation::part_sums), each
-// from the rank owning the load (AppliedLoads::Owned).
+// exactly over the ranks by the step's sums (Simulation::step_sums), each from the rank owning
+// the load (AppliedLoads::Owned).
 #pragma once
 #include <cstdint>
 #include <vector>

@@ -10,10 +10,8 @@ std::string halo_unsupported(const Case& c) {
   for (const auto& h : c.holes)
     if (h.model == ChargeModel::Solid) return "solid charges (their explosive blocks and gas span the parts)";
   if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
-  for (const auto& mt : c.materials) {
+  for (const auto& mt : c.materials)
     if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
-    if (mt.stiffness_damping > 0) return "stiffness-proportional damping (its work summed over the model each step)";
-  }
   return "";
 }
 

@@ -280,7 +280,7 @@ void Simulation::step(bool sample) {
   auto inv = block_forces(m_, &first, /*gather_springs=*/true, own_lo_, own_hi_);
   if (!rank_blocks_.empty()) inv = share_blocks(inv);
   if (halo_) {
-    part_inverted(inv, first);  // a part: its own blocks (over the whole model in part_sums)
+    part_inverted(inv, first);  // a part: its own blocks (over the whole model in step_sums)
   } else if (inv > 0) {
     // only the rock's inversions stop a run (rock_inverted): recounted here, in the rare steps
     // with an inversion
@@ -305,59 +305,114 @@ void Simulation::step(bool sample) {
   for (auto& h : loads_) h(m_, applied_, t_);
   lap(kStepLoads);
   // 6. tied mode: ties broken by the blocks' traction are untied (their force added to f)
-  if (m_.tied) {
-    const double insertion = tie_failure(m_, t_, tie_flag_, halo_ ? &insert_terms_ : nullptr);
-    if (!halo_) w_insert_ += insertion;  // (a part: over the whole model, part_sums)
-  }
+  if (m_.tied) tie_failure(m_, t_, tie_flag_, &insert_terms_);
   lap(kStepTies);
   // 7. boundary loads (pressure, dashpots)
   boundary_forces(m_, bc_, t_);
   lap(kStepBoundary);
   // 8. integration with gravity and damping, then the velocity constraints (prescribed at the
   // mid-step time); tied mode: one velocity per cluster, constrained as a whole.
-  double step_boundary = 0;
   if (m_.tied) {
     integrate_tied(m_, bc_, dt_, t_ + 0.5 * dt_, vtx_con_.data(), vtx_dissipated_.data(),
                    sample ? vtx_ke_.data() : nullptr, vtx_cke_.empty() ? nullptr : vtx_cke_.data(),
                    vtx_reaction_.data());
     lap(kStepIntegrate);
-    last_boundary_ = 0;
-    for (auto v : con_vertices_) {
-      step_boundary += vtx_reaction_[2 * v];
-      last_boundary_ += vtx_reaction_[2 * v + 1];
-    }
   } else {
     integrate(m_, bc_.gravity, dt_, block_dissipated_.data(), sample ? ke_.data() : nullptr,
               cke_.empty() ? nullptr : cke_.data());
     lap(kStepIntegrate);
-    step_boundary = apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_, &last_boundary_, halo_ ? &con_terms_ : nullptr);
+    apply_constraints(m_, bc_, t_ + 0.5 * dt_, dt_, con_terms_);
   }
   // 9. the works of the step, F(n) . (v(n-1/2) + v(n+1/2)) / 2 dt, and their parts after t_n
   // (energy() takes those back out, see last_*_)
-  // (a part: the explosive loads' power over the whole model, part_sums)
-  double power_old = applied_.power_old, power_new = halo_ ? 0.0 : applied_.power_now(m_);
-  if (beta_max_ > 0) {  // serial sums in a fixed order: the same for any thread count
-    double at_old = 0, at_new = 0;
-    for (double p : sd_power_) at_old += p;
-    for (std::size_t n = 0; n < sd_force_.size(); ++n) at_new += dot(sd_force_[n], m_.v[n]);
-    w_sdamp_ += 0.5 * dt_ * (at_old + at_new);
-    last_sdamp_ = 0.5 * dt_ * at_new;
-  }
-  double step_absorbed = 0, load_after = 0;
-  step_boundary += load_work(m_, bc_, dt_, &step_absorbed, &load_after, &last_absorbed_);
-  // a part: these sums and the inverted blocks over the whole model
-  if (halo_) part_sums(step_boundary, step_absorbed, load_after, inv, first, power_old, power_new);
-  const double step_explosive = 0.5 * dt_ * (power_old + power_new);
-  last_explosive_ = 0.5 * dt_ * power_new;
-  if (inv > 0 && first_inverted_ < 0) first_inverted_ = first;
-  inverted_ = inv;
-  last_boundary_ += load_after;
-  w_boundary_ += step_boundary;
-  w_explosive_ += step_explosive;
-  w_absorbed_ += step_absorbed;
+  load_work_terms(m_, bc_);
+  if (!halo_) applied_.now_terms(m_);
+  step_sums(inv, first);
   t_ += dt_;
   ++steps_;
   lap(kStepWork);
+}
+
+void Simulation::step_sums(std::int64_t inv, std::int32_t first) {
+  // Each term once, summed exactly (core/exact_sum.hpp): the same bits in any order, and in a
+  // part (the halo stage) over its own entities with the sums reduced over the ranks, so that
+  // every rank gets the whole model's sums, the bits one process gets.
+  enum : std::size_t {
+    kReaction, kReactionAfter,    // tied: the constrained vertices' reaction works; springs: powers
+    kLoad, kLoadAfter, kAbsorbed, kAbsorbedAfter,  // the boundary loads' powers (load_work_terms)
+    kInsertion, kExplosiveOld, kExplosiveNew,
+    kStiffOld, kStiffNew,  // the stiffness damping's power with v(n-1/2) (per block) and v(n+1/2)
+    kInverted, kSums
+  };
+  const OwnMasks own = own_masks();
+  auto mine = [](const std::uint8_t* mask, std::size_t i) { return mask == nullptr || mask[i] != 0; };
+  const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
+    if (m_.tied) {
+      for (auto v : con_vertices_)
+        if (mine(own.vertex, static_cast<std::size_t>(v))) {
+          put(kReaction, vtx_reaction_[2 * static_cast<std::size_t>(v)]);
+          put(kReactionAfter, vtx_reaction_[2 * static_cast<std::size_t>(v) + 1]);
+        }
+    } else {
+      for (std::size_t j = 0; j < bc_.constraints.size(); ++j)
+        if (mine(own.node, static_cast<std::size_t>(bc_.constraints[j].node))) {
+          put(kReaction, con_terms_[2 * j]);
+          put(kReactionAfter, con_terms_[2 * j + 1]);
+        }
+    }
+    const double* wt = bc_.work_terms.data();
+    for (std::size_t i = 0; i < bc_.work_nodes.size(); ++i)
+      if (mine(own.node, static_cast<std::size_t>(bc_.work_nodes[i]))) {
+        put(kLoad, wt[4 * i]);
+        put(kAbsorbed, wt[4 * i + 1]);
+        put(kLoadAfter, wt[4 * i + 2]);
+        put(kAbsorbedAfter, wt[4 * i + 3]);
+      }
+    const auto np = static_cast<std::int64_t>(m_.springs_per_iface);
+    for (const auto& [s, e] : insert_terms_)
+      if (mine(own.iface, static_cast<std::size_t>(s / np))) put(kInsertion, e);
+    if (halo_) {  // (a part's loads: those it owns, AppliedLoads::Owned)
+      const AppliedLoads::Owned& xo = applied_.owned;
+      for (std::size_t k = 0; k < xo.b.size(); ++k) {
+        const auto b = static_cast<std::size_t>(xo.b[k]);
+        put(kExplosiveOld, xo.old[k]);
+        put(kExplosiveNew, xo.a[k] < 0 ? dot(xo.f[k], m_.v[b]) : dot(xo.f[k], m_.v[b] - m_.v[static_cast<std::size_t>(xo.a[k])]));
+      }
+    } else {
+      for (double p : applied_.old_terms) put(kExplosiveOld, p);
+      const std::size_t nx = applied_.node.size() + applied_.pair_b.size();
+      for (std::size_t k = 0; k < nx; ++k) put(kExplosiveNew, applied_.terms[k]);
+    }
+    if (beta_max_ > 0) {
+      for (std::size_t b = 0; b < sd_power_.size(); ++b)
+        if (mine(own.block, b)) put(kStiffOld, sd_power_[b]);
+      for (std::size_t n = 0; n < sd_force_.size(); ++n)
+        if (mine(own.node, n)) put(kStiffNew, dot(sd_force_[n], m_.v[n]));
+    }
+    put(kInverted, static_cast<double>(inv));  // (a count below 2^53: exact)
+  }, halo_ ? rank_reducer() : nullptr);
+  const double half = 0.5 * dt_;
+  // tied mode: the reactions' terms are works (integrate_tied); springs mode: powers
+  const double react = m_.tied ? 1.0 : dt_, react_after = m_.tied ? 1.0 : half;
+  w_boundary_ += react * sum[kReaction] + dt_ * sum[kLoad];
+  last_boundary_ = react_after * sum[kReactionAfter] + half * sum[kLoadAfter];
+  w_absorbed_ -= dt_ * sum[kAbsorbed];
+  last_absorbed_ = -half * sum[kAbsorbedAfter];
+  w_insert_ += sum[kInsertion];
+  w_explosive_ += half * (sum[kExplosiveOld] + sum[kExplosiveNew]);
+  last_explosive_ = half * sum[kExplosiveNew];
+  if (beta_max_ > 0) {
+    w_sdamp_ += half * (sum[kStiffOld] + sum[kStiffNew]);
+    last_sdamp_ = half * sum[kStiffNew];
+  }
+  inverted_ = static_cast<std::int64_t>(sum[kInverted]);
+  // the first inverted block (the whole model's index): the least over the ranks
+  if (halo_ && inverted_ > 0) {
+    constexpr std::int64_t none = std::numeric_limits<std::int64_t>::min();
+    const std::int64_t r = max_over_ranks(first >= 0 ? -static_cast<std::int64_t>(first) : none);
+    first = r == none ? -1 : static_cast<std::int32_t>(-r);
+  }
+  if (inverted_ > 0 && first_inverted_ < 0) first_inverted_ = first;
 }
 
 void Simulation::distribute(const std::vector<std::int64_t>& block_first, int rank) {

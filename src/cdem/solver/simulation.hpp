@@ -234,9 +234,10 @@ class Simulation {
   // The halo stage: a part's indices (make_part), the whole's gather lists (gather_parts).
   std::shared_ptr<HaloIndex> halo_;
   std::shared_ptr<const HaloGatherLists> gather_;
-  // a part's step sums over the whole model (make_part)
-  void part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
-                 std::int32_t& first, double& power_old, double& power_new);
+  // The step's works (the boundary's, the explosive loads', the insertion energy) and the
+  // inverted blocks (inv of them, the first `first`), summed exactly over this Simulation's own
+  // entities (a part: reduced over the ranks) into the accumulated works.
+  void step_sums(std::int64_t inv, std::int32_t first);
   // a part's inverted blocks: its own blocks' count and first (global) block
   void part_inverted(std::int64_t& inv, std::int32_t& first) const;
   // Block b has inverted and is rock: a bar's charge blocks and a solid charge's explosive blocks
@@ -245,8 +246,8 @@ class Simulation {
     const BlockMaterial& mt = m_.block_materials[m_.block_material[b]];
     return !(m_.vol_ratio[b] > 0) && !mt.charge_block && mt.explosive.empty();
   }
-  std::vector<std::pair<std::int64_t, double>> insert_terms_;  // a part's step: (point, energy)
-  std::vector<double> con_terms_;  // a part's step, springs mode: two terms per constraint
+  std::vector<std::pair<std::int64_t, double>> insert_terms_;  // the step's untied points: (point, energy)
+  std::vector<double> con_terms_;  // the step's constraints (springs mode): two powers each
 };
 
 }  // namespace cdem

@@ -1,15 +1,16 @@
 // The halo stage of a distributed run in the Simulation (simulation.hpp, parallel/halo.hpp): a
-// part's step sums over the whole model, and the whole model's state gathered from the parts.
+// part's own entities, and the whole model's state gathered from the parts.
 //
 // A part (make_part) steps its own blocks and its ghost zone. Its kernels give its own entities
-// the whole model's bits (tests/verification/test_halo.cpp); the sums a step forms over the model
-// would not: they run over the part's entities, ghosts included. So a part lists its own terms
-// of each sum with their place in the whole model's order, the ranks gather them (one
-// MPI_Allgatherv of a few numbers per boundary node, constrained vertex and untied point), and
-// every rank adds the whole list in that order, as one process does.
+// the whole model's bits (tests/verification/test_halo.cpp); the sums a step or a sample forms
+// over the model would not: they would run over the part's entities, ghosts included. So a part
+// lists only the terms of the entities it owns (own_masks), and its sums, exact (core/
+// exact_sum.hpp), are reduced over the ranks: two MPI_Allreduce of a few numbers per sum, the bits
+// one process gets, whatever the parts.
 //
 // The whole model's Simulation then only holds the state for the run loop's outputs, analyses
-// and checkpoints: gather_parts fills it from the parts' own entities when the loop reads it.
+// and checkpoints: gather_parts fills it from the parts' own entities when the loop reads all of
+// it, gather_sample the few entities a history sample reads.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -27,15 +28,11 @@ struct HaloIndex {
   std::vector<std::int32_t> part;  // per global block
   std::vector<std::int32_t> block, node, iface, vertex;  // local -> global (PartModel)
   std::vector<std::uint8_t> own_block, own_node, own_iface, own_vertex;  // per local entity
-  // own terms' places in the whole's order, ascending: (whole's index, local index)
+  // own entities' places in the whole's order, ascending: (whole's index, local index), of what
+  // gather_parts carries besides the model: the boundary work nodes' v(n-1/2), the load facets'
+  // forces
   std::vector<std::pair<std::int32_t, std::int32_t>> work;   // boundary work nodes
   std::vector<std::pair<std::int32_t, std::int32_t>> loads;  // boundary load facets
-  std::vector<std::pair<std::int32_t, std::int32_t>> con;    // constrained vertices (tied), constraints (springs)
-  std::size_t n_work = 0, n_con = 0;                         // the whole's counts
-  // part_sums' buffers, grown in the first steps and kept (no allocation in a step after)
-  std::vector<double> mine, all, work_terms, con_terms, x_old, x_new;
-  std::vector<std::int64_t> at;
-  std::vector<std::pair<std::int64_t, double>> ins;
 };
 
 // On the whole model: per rank, its own entities in ascending global order.
@@ -88,9 +85,9 @@ struct Get {
 }  // namespace
 
 void Simulation::make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part) {
-  if (!loads_.empty() || beta_max_ > 0 || contact_.enabled || !rank_blocks_.empty())
+  if (!loads_.empty() || contact_.enabled || !rank_blocks_.empty())
     throw std::logic_error("Simulation::make_part: a part takes its charges' load hook after this (HaloBars), "
-                           "and no stiffness damping or contact yet");
+                           "and no contact yet");
   auto h = std::make_shared<HaloIndex>();
   h->rank = ranks().rank;
   h->ranks = ranks().size;
@@ -115,10 +112,7 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
       const auto gv = pm.vertex[static_cast<std::size_t>(lv)];
       const auto it = std::lower_bound(whole.con_vertices_.begin(), whole.con_vertices_.end(), gv);
       if (it == whole.con_vertices_.end() || *it != gv) throw std::logic_error("make_part: a constrained vertex the whole lacks");
-      if (h->own_vertex[static_cast<std::size_t>(lv)])
-        h->con.emplace_back(static_cast<std::int32_t>(it - whole.con_vertices_.begin()), lv);
     }
-    h->n_con = whole.con_vertices_.size();
   } else {
     // the springs mode's constraints: the part's are the whole's at its nodes, in the same order
     std::size_t j = 0;
@@ -129,11 +123,9 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
       const auto ln = it - pm.node.begin();
       if (j >= bc_.constraints.size() || bc_.constraints[j].node != ln)
         throw std::logic_error("make_part: the part's constraints are not the whole's");
-      if (h->own_node[static_cast<std::size_t>(ln)]) h->con.emplace_back(static_cast<std::int32_t>(g), static_cast<std::int32_t>(j));
       ++j;
     }
     if (j != bc_.constraints.size()) throw std::logic_error("make_part: the part has constraints the whole lacks");
-    h->n_con = whole.bc_.constraints.size();
   }
   // boundary work nodes: the whole's index of each own one
   {
@@ -146,7 +138,6 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
       if (h->own_node[ln]) h->work.emplace_back(gw, static_cast<std::int32_t>(i));
     }
     std::sort(h->work.begin(), h->work.end());
-    h->n_work = whole.bc_.work_nodes.size();
   }
   // load facets: the part's are the whole's of its blocks, in the same order
   {
@@ -185,117 +176,6 @@ void Simulation::part_inverted(std::int64_t& inv, std::int32_t& first) const {
       ++inv;
     }
   }
-}
-
-// The step's sums over the whole model, in its order (step(), after load_work): see the top.
-void Simulation::part_sums(double& step_boundary, double& step_absorbed, double& load_after, std::int64_t& inv,
-                           std::int32_t& first, double& power_old, double& power_new) {
-  HaloIndex& h = *halo_;
-  std::vector<double>& mine = h.mine;
-  const AppliedLoads::Owned& xo = applied_.owned;
-  mine.assign({static_cast<double>(inv), static_cast<double>(first), 0.0, static_cast<double>(h.con.size()), 0.0,
-               static_cast<double>(xo.at.size())});
-  // (a node whose four terms are zero, most of a boundary at rest or only constrained, is left
-  // out: adding a zero to the sums changes no bit, as they never hold -0; fma(+-0, dt, w) = w)
-  std::size_t nwork = 0;
-  for (const auto& [gw, i] : h.work) {
-    const double* t = &bc_.work_terms[4 * static_cast<std::size_t>(i)];
-    if (t[0] == 0 && t[1] == 0 && t[2] == 0 && t[3] == 0) continue;
-    mine.push_back(gw);
-    mine.insert(mine.end(), t, t + 4);
-    ++nwork;
-  }
-  mine[2] = static_cast<double>(nwork);
-  // (tied mode: a constrained vertex's two reaction terms; springs mode: a constraint's two dot
-  // products, apply_constraints)
-  const std::vector<double>& con_terms = m_.tied ? vtx_reaction_ : con_terms_;
-  for (const auto& [gc, l] : h.con)
-    mine.insert(mine.end(), {static_cast<double>(gc), con_terms[2 * static_cast<std::size_t>(l)],
-                             con_terms[2 * static_cast<std::size_t>(l) + 1]});
-  std::size_t nins = 0;
-  for (const auto& [s, e] : insert_terms_) {
-    const auto li = static_cast<std::size_t>(s / h.np);
-    if (!h.own_iface[li]) continue;
-    mine.push_back(static_cast<double>(static_cast<std::int64_t>(h.iface[li]) * h.np + s % h.np));
-    mine.push_back(e);
-    ++nins;
-  }
-  mine[4] = static_cast<double>(nins);
-  // the explosive loads this part owns: their places in the whole record, their power terms with
-  // v(n-1/2) and with v(n+1/2) (as power_now forms them)
-  for (std::size_t k = 0; k < xo.at.size(); ++k) {
-    const auto b = static_cast<std::size_t>(xo.b[k]);
-    const double now = xo.a[k] < 0 ? dot(xo.f[k], m_.v[b]) : dot(xo.f[k], m_.v[b] - m_.v[static_cast<std::size_t>(xo.a[k])]);
-    mine.insert(mine.end(), {static_cast<double>(xo.at[k]), xo.old[k], now});
-  }
-  std::vector<double>&all = h.all, &work = h.work_terms, &con = h.con_terms;
-  std::vector<double>&x_old = h.x_old, &x_new = h.x_new;
-  const auto n_single = static_cast<std::size_t>(xo.whole_single), n_x = n_single + static_cast<std::size_t>(xo.whole_pairs);
-  x_old.assign(n_x, 0.0);
-  x_new.assign(n_x, 0.0);
-  std::vector<std::pair<std::int64_t, double>>& ins = h.ins;
-  gather_all(mine, all, h.at);
-  const std::vector<std::int64_t>& at = h.at;
-  work.assign(4 * h.n_work, 0.0);
-  con.assign(2 * h.n_con, 0.0);
-  ins.clear();
-  inv = 0;
-  first = -1;
-  for (int r = 0; r < h.ranks; ++r) {
-    const double* p = all.data() + at[r];
-    inv += static_cast<std::int64_t>(p[0]);
-    const auto f = static_cast<std::int32_t>(p[1]);
-    if (f >= 0 && (first < 0 || f < first)) first = f;
-    const auto nw = static_cast<std::size_t>(p[2]), nc = static_cast<std::size_t>(p[3]), ni = static_cast<std::size_t>(p[4]),
-               nx = static_cast<std::size_t>(p[5]);
-    p += 6;
-    for (std::size_t k = 0; k < nw; ++k, p += 5)
-      std::copy(p + 1, p + 5, work.begin() + 4 * static_cast<std::ptrdiff_t>(p[0]));
-    for (std::size_t k = 0; k < nc; ++k, p += 3)
-      std::copy(p + 1, p + 3, con.begin() + 2 * static_cast<std::ptrdiff_t>(p[0]));
-    for (std::size_t k = 0; k < ni; ++k, p += 2) ins.emplace_back(static_cast<std::int64_t>(p[0]), p[1]);
-    for (std::size_t k = 0; k < nx; ++k, p += 3) {
-      const auto place = static_cast<std::size_t>(p[0]);
-      x_old[place] = p[1];
-      x_new[place] = p[2];
-    }
-  }
-  // the explosive loads' power, as one process sums it: power_old as the loads were added (the
-  // pair loads first, then the single loads), power_new in the record's order (AppliedLoads)
-  power_old = 0;
-  for (std::size_t k = n_single; k < n_x; ++k) power_old += x_old[k];
-  for (std::size_t k = 0; k < n_single; ++k) power_old += x_old[k];
-  power_new = 0;
-  for (std::size_t k = 0; k < n_x; ++k) power_new += x_new[k];
-  // the same sums, in the same order, as one process (step(), load_work, tie_failure)
-  double cb = 0, cl = 0;
-  const double half = 0.5 * dt_;
-  for (std::size_t k = 0; k < h.n_con; ++k) {
-    if (m_.tied) {
-      cb += con[2 * k];
-      cl += con[2 * k + 1];
-    } else {
-      cb = std::fma(con[2 * k], dt_, cb);
-      cl = std::fma(half, con[2 * k + 1], cl);
-    }
-  }
-  double wsum = 0, d = 0, wa = 0, da = 0;
-  for (std::size_t i = 0; i < h.n_work; ++i) {
-    wsum = std::fma(work[4 * i], dt_, wsum);
-    d = std::fma(-work[4 * i + 1], dt_, d);
-    wa = std::fma(half, work[4 * i + 2], wa);
-    da = std::fma(-half, work[4 * i + 3], da);
-  }
-  std::sort(ins.begin(), ins.end());
-  double insertion = 0;
-  for (const auto& [s, e] : ins) insertion += e;
-  w_insert_ += insertion;
-  step_boundary = cb;
-  last_boundary_ = cl;
-  step_boundary += wsum;
-  step_absorbed = d;
-  load_after = wa;
-  last_absorbed_ = da;
 }
 
 void Simulation::gather_parts(const Simulation& local, const std::vector<double>* extra_local,
@@ -446,10 +326,11 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
       for (int q = 0; q < 3; ++q) bc_.load_force[3 * static_cast<std::size_t>(i) + q] = get.v3();
     if (get.p != all.data() + at[r + 1]) throw std::logic_error("gather_parts: the parts' records do not match");
   }
-  // What the parts hold alike (the step's sums were formed over the whole model: part_sums).
+  // What the parts hold alike (the step's sums were formed over the whole model: step_sums).
   for (auto d : {&Simulation::t_, &Simulation::dt_, &Simulation::w_insert_, &Simulation::w_boundary_,
                  &Simulation::w_absorbed_, &Simulation::w_explosive_, &Simulation::last_boundary_,
-                 &Simulation::last_absorbed_, &Simulation::last_explosive_})
+                 &Simulation::last_absorbed_, &Simulation::last_explosive_, &Simulation::w_sdamp_,
+                 &Simulation::last_sdamp_})
     this->*d = local.*d;
   steps_ = local.steps_;
   inverted_ = local.inverted_;

@@ -116,7 +116,7 @@ TEST(HaloMpi, BarAcrossParts) {
     // ranks (every rank calls it: a collective), the bits of the whole model's sums
     const EnergyBalance ew = ref.sim.energy(), ep = part.energy();
     ASSERT_EQ(std::memcmp(&ew, &ep, sizeof ew), 0) << "the energy balance, step " << steps;
-    const FractureDegree fw = fracture_degree(w), fp = fracture_degree(l, part.own_masks().iface, rank_reducer());
+    const FractureDegree fw = fracture_degree(w), fp = fracture_summary(l, part.own_masks().iface, rank_reducer()).degree;
     ASSERT_TRUE(halo_check::same(fw.area, fp.area) && halo_check::same(fw.tensile, fp.tensile) && fw.broken == fp.broken &&
                 fw.total == fp.total)
         << "the fracture degree, step " << steps;

@@ -7,24 +7,44 @@ bool counts_as_rock(const Model& m, std::size_t s) {
   return im.law != InterfaceLaw::Elastic && !im.precracked;
 }
 
-FractureDegree fracture_degree(const Model& m, const std::uint8_t* own_iface, const SumReducer* r) {
-  enum : std::size_t { kTotal, kTensile, kShear, kCount, kBroken, kSums };
+FractureSummary fracture_summary(const Model& m, const std::uint8_t* own_iface, const SumReducer* r) {
+  // the sums: the totals, then per region r its total area (sum kRegions + 2 r) and its broken
+  // area (kRegions + 2 r + 1)
+  enum : std::size_t { kTotal, kTensile, kShear, kCount, kBroken, kRegions };
+  const std::size_t nr = m.region_names.size();
   const auto np = static_cast<std::size_t>(m.springs_per_iface);
-  const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
+  // (an interface's points' areas added first, in point order: a term of the exact sums need only
+  // be the same wherever it is formed)
+  const std::vector<double> sum = sum_exactly(kRegions + 2 * nr, [&](auto&& put) {
     std::int64_t total = 0, broken = 0;
-    for (std::size_t s = 0; s < m.n_springs(); ++s) {
-      if (!counts_as_rock(m, s) || (own_iface && !own_iface[s / np])) continue;
-      put(kTotal, m.sp_area[s]);
-      ++total;
-      if (m.sp_state[s] != kIntact) {
-        ++broken;
-        put(m.sp_mode[s] == kModeShear ? kShear : kTensile, m.sp_area[s]);
+    for (std::size_t i = 0; i < m.n_ifaces(); ++i) {
+      if ((own_iface && !own_iface[i]) || !counts_as_rock(m, i * np)) continue;
+      double all = 0, tensile = 0, shear = 0;
+      for (std::size_t s = i * np; s < (i + 1) * np; ++s) {
+        const double a = m.sp_area[s];
+        all += a;
+        if (m.sp_state[s] != kIntact) {
+          ++broken;
+          (m.sp_mode[s] == kModeShear ? shear : tensile) += a;
+        }
+      }
+      total += static_cast<std::int64_t>(np);
+      put(kTotal, all);
+      put(kTensile, tensile);
+      put(kShear, shear);
+      const std::size_t ra = m.block_region[m.iface_block_a[i]], rb = m.block_region[m.iface_block_b[i]];
+      put(kRegions + 2 * ra, all);
+      put(kRegions + 2 * ra + 1, tensile + shear);
+      if (rb != ra) {  // (an interface between two regions counts in both)
+        put(kRegions + 2 * rb, all);
+        put(kRegions + 2 * rb + 1, tensile + shear);
       }
     }
     put(kCount, static_cast<double>(total));  // (integers below 2^53: exact)
     put(kBroken, static_cast<double>(broken));
   }, r);
-  FractureDegree fd;
+  FractureSummary out;
+  FractureDegree& fd = out.degree;
   fd.total = static_cast<std::int64_t>(sum[kCount]);
   fd.broken = static_cast<std::int64_t>(sum[kBroken]);
   if (sum[kTotal] > 0) {
@@ -33,36 +53,17 @@ FractureDegree fracture_degree(const Model& m, const std::uint8_t* own_iface, co
     fd.area = (sum[kTensile] + sum[kShear]) / sum[kTotal];
     fd.count = static_cast<double>(fd.broken) / static_cast<double>(fd.total);
   }
-  return fd;
+  for (std::size_t reg = 0; reg < nr; ++reg)
+    if (sum[kRegions + 2 * reg] > 0) {
+      out.by_region.regions.push_back(static_cast<std::int32_t>(reg));
+      out.by_region.degree.push_back(sum[kRegions + 2 * reg + 1] / sum[kRegions + 2 * reg]);
+    }
+  return out;
 }
 
-RegionFracture fracture_degree_by_region(const Model& m, const std::uint8_t* own_iface, const SumReducer* r) {
-  const std::size_t nr = m.region_names.size();
-  const auto np = static_cast<std::size_t>(m.springs_per_iface);
-  // per region r: its total area (sum 2 r) and its broken area (2 r + 1)
-  const std::vector<double> sum = sum_exactly(2 * nr, [&](auto&& put) {
-    for (std::size_t s = 0; s < m.n_springs(); ++s) {
-      if (!counts_as_rock(m, s) || (own_iface && !own_iface[s / np])) continue;
-      const std::size_t i = s / np;
-      const std::size_t ra = m.block_region[m.iface_block_a[i]], rb = m.block_region[m.iface_block_b[i]];
-      const double a = m.sp_area[s];
-      const bool broken = m.sp_state[s] != kIntact;
-      put(2 * ra, a);
-      if (broken) put(2 * ra + 1, a);
-      if (rb != ra) {  // (an interface between two regions counts in both)
-        put(2 * rb, a);
-        if (broken) put(2 * rb + 1, a);
-      }
-    }
-  }, r);
-  RegionFracture rf;
-  for (std::size_t reg = 0; reg < nr; ++reg)
-    if (sum[2 * reg] > 0) {
-      rf.regions.push_back(static_cast<std::int32_t>(reg));
-      rf.degree.push_back(sum[2 * reg + 1] / sum[2 * reg]);
-    }
-  return rf;
-}
+FractureDegree fracture_degree(const Model& m) { return fracture_summary(m).degree; }
+
+RegionFracture fracture_degree_by_region(const Model& m) { return fracture_summary(m).by_region; }
 
 void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode) {
   const std::size_t nb = m.n_blocks();

@@ -23,11 +23,7 @@ struct FractureDegree {
 // True for spring points that count as rock (breakable, not pre-cracked).
 bool counts_as_rock(const Model& m, std::size_t spring);
 
-// The areas are summed exactly (core/exact_sum.hpp). own_iface (per interface, 1 own; null:
-// all) and r: a part of a distributed run lists its own interfaces' points and the sums are
-// reduced over the ranks (every rank calls it at once), with the bits one process gets.
-FractureDegree fracture_degree(const Model& m, const std::uint8_t* own_iface = nullptr,
-                               const SumReducer* r = nullptr);
+FractureDegree fracture_degree(const Model& m);
 
 // Fracture degree per region (fracture.csv degree_area_<region>, summary.json
 // fracture_degree_regions): for region r, the broken / total area of the rock spring points
@@ -38,8 +34,18 @@ struct RegionFracture {
   std::vector<std::int32_t> regions;
   std::vector<double> degree;  // area fraction, per listed region
 };
-RegionFracture fracture_degree_by_region(const Model& m, const std::uint8_t* own_iface = nullptr,
-                                         const SumReducer* r = nullptr);
+RegionFracture fracture_degree_by_region(const Model& m);
+
+// Both, in one pass (a history sample). The areas are summed exactly (core/exact_sum.hpp):
+// own_iface (per interface, 1 own; null: all) and r: a part of a distributed run lists its own
+// interfaces' points and the sums are reduced over the ranks (every rank calls it at once), with
+// the bits one process gets.
+struct FractureSummary {
+  FractureDegree degree;
+  RegionFracture by_region;
+};
+FractureSummary fracture_summary(const Model& m, const std::uint8_t* own_iface = nullptr,
+                                 const SumReducer* r = nullptr);
 
 void block_damage(const Model& m, std::vector<double>& damage, std::vector<std::int32_t>& mode);
 

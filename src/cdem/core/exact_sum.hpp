@@ -47,6 +47,7 @@ class ExactSums {
   void add(std::size_t i, double x) {
     std::uint64_t u;
     std::memcpy(&u, &x, sizeof u);
+    if ((u << 1) == 0) return;  // +-0 (most of a sample's dissipation terms)
     const auto e = static_cast<unsigned>(u >> 52) & 0x7ffu;
     if (e == 0x7ffu) {  // NaN, infinity
       bad_[i] = 1;

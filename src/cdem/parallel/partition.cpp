@@ -306,7 +306,7 @@ Projection project(const BlockGraph& g, const PartitionQuality& q, double second
   for (std::size_t b = 0; b < g.n(); ++b) total += g.vwgt.empty() ? 1.0 : g.vwgt[b];
   const double add_s = (q.parts > 1 ? sums.terms_max : sums.terms) * sums.seconds_per_term;
   const double stages = q.parts > 1 ? std::ceil(std::log2(static_cast<double>(q.parts))) : 0.0;
-  const double reduce_s = q.parts > 1 ? 2 * stages * net.latency : 0.0;
+  const double reduce_s = q.parts > 1 ? stages * (2 * net.latency + sums.reduce_bytes / net.bandwidth) : 0.0;
   pr.sums_s = add_s + reduce_s;
   pr.compute_s = q.stepped_max * seconds_per_unit + add_s;
   pr.comm_s = q.messages_max * net.latency + q.bytes_max / net.bandwidth + reduce_s;

@@ -11,8 +11,8 @@
 // block). Per step a part receives its ghost
 // blocks' node positions and velocities (6 doubles per node) from their owners and sends as much
 // for its own blocks that are ghosts elsewhere: one message each way per neighbouring part. Every
-// rank also joins two collectives per step (the step's ordered sums, gathered whole, and the stop
-// signal).
+// rank also joins two collectives per step (the step's exact sums, one MPI_Allreduce of their
+// bins, and the stop signal).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -109,13 +109,16 @@ struct Network {
 //             + its own terms of the step's sums x seconds per term (exact sums, two passes:
 //             Simulation::step_sums);
 //   comm    = its messages x latency + its bytes / bandwidth
-//             + 2 collectives (MPI_Allreduce of a few int64 per sum) x ceil(log2 parts) x latency;
+//             + ceil(log2 parts) x (2 latencies + the sums' bytes / bandwidth) (two collectives,
+//               recursive doubling: the sums' bins, and the stop signal);
 // efficiency without overlap = compute(1 process) / parts / (compute + comm), where one process
 // steps the model's weight and sums all the terms.
 struct StepSums {
   double terms = 0;                // terms per step over the whole model
   double terms_max = 0;            // the busiest part's own terms (for the partition projected)
-  double seconds_per_term = 2e-9;  // to sum one of them exactly (measured: bench --partition)
+  double seconds_per_term = 3e-9;  // to sum one of them exactly (measured: bench --partition)
+  // the bytes reduced: Simulation::step_sums's 12 sums, each 193 int64 (ExactSums::result)
+  double reduce_bytes = 8.0 * 193 * 12;
 };
 struct Projection {
   double compute_s = 0, comm_s = 0, ratio = 0, efficiency = 0;

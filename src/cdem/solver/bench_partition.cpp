@@ -128,9 +128,9 @@ int run_partition_projection(const BenchOptions& opt) {
   if (!opt.json)
     std::printf("cost per block-step on one core: %.1f ns (%s); network: %.0f Gb/s, %.1f us per "
                 "message; no overlap of communication and computation; the step's sums: %.1f ns per "
-                "term summed exactly (measured), two collectives\n",
+                "term summed exactly (measured), two collectives (%.0f bytes reduced)\n",
                 step_ns, opt.step_ns > 0 ? "given" : "measured on the 30k box, 1 thread",
-                net.bandwidth * 8 / 1e9, net.latency * 1e6, sums.seconds_per_term * 1e9);
+                net.bandwidth * 8 / 1e9, net.latency * 1e6, sums.seconds_per_term * 1e9, sums.reduce_bytes);
   for (std::size_t si = 0; si < sizes.size(); ++si) {
     const auto cells = bench::tet_cells_for(std::max<std::int64_t>(6, sizes[si]));
     double t0 = omp_get_wtime();

@@ -393,14 +393,13 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       const Simulation::OwnMasks own = summed.own_masks();
       const SumReducer* reducer = halo ? rank_reducer() : nullptr;
       last = summed.energy();
-      const FractureDegree fd = fracture_degree(summed.model(), own.iface, reducer);
-      const RegionFracture fr = fracture_degree_by_region(summed.model(), own.iface, reducer);
+      const FractureSummary fs = fracture_summary(summed.model(), own.iface, reducer);
       // The ranks' states are the same bits (ranks.hpp): checked at each sample.
       if (rk.size > 1 && !same_over_ranks(energy_bits(last)))
         throw std::runtime_error(fmt::format("the ranks' states differ at step {} (t = {:.6g} s): "
                                              "a defect of the distributed run; please report it",
                                              k, t_state));
-      if (out) out->write_history(m, t_state, last, fd, fr.degree, monitors);
+      if (out) out->write_history(m, t_state, last, fs.degree, fs.by_region.degree, monitors);
       uplift.sample_monitors(m, monitors, t_state);
       if (!reactions.empty()) {
         reactions.after_step(m, dt, t_state + 0.5 * dt);

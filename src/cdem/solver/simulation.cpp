@@ -524,15 +524,28 @@ EnergyBalance Simulation::energy() const {
         put(kProducts, share * m_.mass[n] / mv * vtx_ke_[v]);
       }
     }
+    // (per interface, its points' terms added first in point order: a term of the exact sums need
+    // only be the same wherever it is formed)
     const auto np = static_cast<std::size_t>(m_.springs_per_iface);
-    for (std::size_t s = 0; s < m_.n_springs(); ++s) {
-      if (!mine(own.iface, s / np)) continue;
-      put(kFracture, m_.sp_dissipated[s]);
-      if (m_.sp_state[s] != kReleased)
-        put(kSpringStrain, 0.5 * m_.sp_fn[s] * m_.sp_fn[s] / m_.sp_kn[s] + 0.5 * dot(m_.sp_fs[s], m_.sp_fs[s]) / m_.sp_ks[s]);
+    for (std::size_t i = 0; i < m_.n_ifaces(); ++i) {
+      if (!mine(own.iface, i)) continue;
+      double dissipated = 0, strain = 0;
+      for (std::size_t s = i * np; s < (i + 1) * np; ++s) {
+        dissipated += m_.sp_dissipated[s];
+        if (m_.sp_state[s] != kReleased)
+          strain += 0.5 * m_.sp_fn[s] * m_.sp_fn[s] / m_.sp_kn[s] + 0.5 * dot(m_.sp_fs[s], m_.sp_fs[s]) / m_.sp_ks[s];
+      }
+      put(kFracture, dissipated);
+      put(kSpringStrain, strain);
     }
-    for (std::size_t n = 0; n < m_.n_nodes(); ++n)
-      if (mine(own.node, n)) put(kGravity, m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n)));
+    if (bc_.gravity.x != 0 || bc_.gravity.y != 0 || bc_.gravity.z != 0)
+      for (std::size_t b = 0; b < m_.n_blocks(); ++b) {  // (a block's nodes' terms added first)
+        if (!mine(own.block, b)) continue;
+        double w = 0;
+        for (auto n = m_.block_first_node[b]; n < m_.block_first_node[b + 1]; ++n)
+          w += m_.mass[n] * dot(bc_.gravity, m_.x[n] - m_.X(n));
+        put(kGravity, w);
+      }
   }, halo_ ? rank_reducer() : nullptr);
   EnergyBalance e;
   e.kinetic = sum[kKinetic];

@@ -100,7 +100,7 @@ inline std::int64_t step_parts(const HaloCase& hc, const std::vector<std::int32_
   std::size_t ghosts = 0;
   for (int p : mine) {
     parts.push_back(cut_part(model, part, p));
-    WholeModelSetup ws{whole.omega2_max(), {}, {}, !whole.model().local_damping.empty()};
+    WholeModelSetup ws{whole.omega2_max(), {}, {}, !whole.model().local_damping.empty(), &whole.stable()};
     if (hc.c.interface_mode == InterfaceMode::Tied) ws.node_springs = node_spring_counts(model, parts.back());
     sims.push_back(std::make_unique<Simulation>(parts.back().model, part_case, &ws));
     ghosts += parts.back().ghost_blocks;

@@ -34,7 +34,7 @@ HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCh
   Case part_case = c;
   part_case.fixed_dt = whole.dt();
   part_case.mass_scaling_limit = 1;  // (the whole model's share was checked; a part's may be larger)
-  WholeModelSetup ws{whole.omega2_max(), {}, {}, !m.local_damping.empty()};
+  WholeModelSetup ws{whole.omega2_max(), {}, {}, !m.local_damping.empty(), &whole.stable()};
   if (m.tied) ws.node_springs = node_spring_counts(m, pm);
   if (!m.damping.empty())
     for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);

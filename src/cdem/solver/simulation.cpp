@@ -75,7 +75,11 @@ Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole)
             c.mass_scaling_limit));
     }
     build_ties(m_);
-    stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
+    // (a part: the whole model's step and largest frequency, not its subset's: not computed)
+    if (whole && whole->stable)
+      stable_ = *whole->stable;
+    else
+      stable_ = stable_time_step_tied(m_, c.dt_safety, c.opened_stiffness, &omega2_max_);
     if (whole) omega2_max_ = whole->omega2_max;
     opened_ = set_opened_stiffness(m_, c.opened_stiffness, omega2_max_,
                                    whole && !whole->node_springs.empty() ? &whole->node_springs : nullptr);
@@ -90,13 +94,15 @@ Simulation::Simulation(Model model, const Case& c, const WholeModelSetup* whole)
     if (!m_.damping.empty() || !m_.local_damping.empty()) vtx_cke_.assign(nv, 0.0);
     tie_flag_.assign(m_.n_ifaces(), 0);
   } else {
-    stable_ = stable_time_step(m_, c.dt_safety, c.contact.enabled);
+    stable_ = whole && whole->stable ? *whole->stable : stable_time_step(m_, c.dt_safety, c.contact.enabled);
   }
   contact_ = setup_contact(m_, c.contact, c.opened_stiffness, m_.tied ? omega2_max_ : 0.0);
   beta_max_ = max_stiffness_damping(m_);
   if (beta_max_ > 0) {
-    stable_.dt = stable_.safety * damped_stable_step(stable_.dt / stable_.safety, beta_max_);
-    stable_.limit += " with stiffness damping";
+    if (!(whole && whole->stable)) {  // (the whole model's is damped already)
+      stable_.dt = stable_.safety * damped_stable_step(stable_.dt / stable_.safety, beta_max_);
+      stable_.limit += " with stiffness damping";
+    }
     sd_force_.assign(m_.n_nodes(), Vec3{});
     sd_power_.assign(m_.n_blocks(), 0.0);
   }

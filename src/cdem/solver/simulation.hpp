@@ -87,6 +87,9 @@ struct WholeModelSetup {
   // whether the whole model keeps its local (material) damping array: a part keeps the damping
   // arrays the whole keeps, zero or not, so that its nodes take the kernels' same paths
   bool local_damping = false;
+  // the whole model's stable step (its blocks' eigenvalues are the set-up's costliest part; a
+  // part's would be those of a subset, and it steps with the whole's step); null: the part's own
+  const StableStep* stable = nullptr;
 };
 
 class Simulation {

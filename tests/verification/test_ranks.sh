@@ -154,6 +154,23 @@ import csv, sys
 last = [list(csv.DictReader(open(p)))[-1] for p in sys.argv[1:]]
 assert float(last[1]["damping"]) > float(last[0]["damping"]) + 1e-3 * abs(float(last[0]["damping"])), last
 EOF
+# ... and with only a corner plug damped: parts without a damped block book the work the others sum
+for n in 1 3; do
+  run "$n" "$TMP/h_PL_$n" "$ROOT/tests/verification/cases/plug_box_3d.toml" 2> "$TMP/log_h" ||
+    { cat "$TMP/log_h"; fail "the plug box (damping in one region), halo, on $n ranks"; }
+done
+same "$TMP/h_PL_1" "$TMP/h_PL_3"
+[ "$(mode "$TMP/h_PL_3")" = halo ] || fail "the plug box on 3 ranks: not the halo stage"
+# a run that goes unstable in the halo stage (the base's pressure overflowing) stops at the same
+# step as one process, with its diagnosis (found from the reduced sums and counts, worded from the
+# whole state gathered then) and the same outputs kept
+for n in 1 2; do
+  rc=0
+  run "$n" "$TMP/h_U_$n" "${H3[@]}" --set boundary.0.pressure=1e300 2> "$TMP/log_h" || rc=$?
+  [ "$rc" = 3 ] || { cat "$TMP/log_h"; fail "an unstable halo run on $n ranks: exit $rc, not 3"; }
+done
+same "$TMP/h_U_1" "$TMP/h_U_2"
+[ "$(mode "$TMP/h_U_2")" = halo ] || fail "the unstable run on 2 ranks: not the halo stage"
 # the replicated stage asked for: the same bits
 "${MPIRUN[@]}" -np 2 "$BIN" run "${H3[@]}" -o "$TMP/h_rep" -t 1 --fixed-threads -q --ranks-mode replicated 2> "$TMP/log_h" ||
   { cat "$TMP/log_h"; fail "3D box, --ranks-mode replicated"; }
@@ -194,7 +211,7 @@ EOF
 "$BIN" check "${B3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the bar box's stage"
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
   fail "check --parts: the 2D bar case's stage (contact)"
-echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping on 3), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box) continued on 3 ranks"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping, everywhere or in one region, on 3; unstable on 2), a 3D bar across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box) continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets

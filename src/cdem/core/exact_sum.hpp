@@ -11,7 +11,7 @@
 // One pass over the terms; over the ranks, the bins are summed by one MPI_SUM (each bin as three
 // 42-bit limbs in int64, so that up to 2^21 ranks cannot overflow a limb). The bins, carried
 // into 32-bit digits, are the exact sum, rounded once to the nearest double (ties to even; a
-// subnormal result may round twice).
+// subnormal result is exact: every sum of doubles is a multiple of 2^-1074).
 //
 // A sum with a NaN or infinite term is NaN. A zero term adds nothing (-0 too: an empty sum, or one
 // of zeros, is +0).

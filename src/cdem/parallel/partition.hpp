@@ -106,7 +106,7 @@ struct Network {
 };
 // Per step of the busiest part (parallel/halo.hpp, as built; docs/parallel.md):
 //   compute = its stepped weight (own + ghost blocks) x (seconds per weight unit)
-//             + its own terms of the step's sums x seconds per term (exact sums, two passes:
+//             + its own terms of the step's sums x seconds per term (exact sums:
 //             Simulation::step_sums);
 //   comm    = its messages x latency + its bytes / bandwidth
 //             + ceil(log2 parts) x (2 latencies + the sums' bytes / bandwidth) (two collectives,

@@ -63,7 +63,9 @@ double measure_sum_ns() {
 // The terms of the step's sums (Simulation::step_sums) for the bench box's case, each with a block
 // whose part owns it: tied mode, its bottom fixed (a constrained vertex: two reaction terms) and
 // its four sides non-reflecting (a node of a block with a face on them: four work terms; all
-// counted, as once the waves have reached the sides). (block, terms) per entry.
+// counted, as once the waves have reached the sides). (block, terms) per entry; a fixed vertex
+// goes with the lowest block that has a base face at it (the run's owner, vertex_owner, takes the
+// block of its lowest node among all its blocks: close enough for the busiest part's count).
 std::vector<std::pair<std::int32_t, double>> bench_sum_terms(const Mesh& mesh) {
   std::vector<std::int32_t> identity(mesh.num_elements());
   std::iota(identity.begin(), identity.end(), 0);

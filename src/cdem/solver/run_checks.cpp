@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "cdem/core/error.hpp"
 #include "cdem/physics/contact.hpp"
@@ -57,16 +58,25 @@ std::string check_stability(const Simulation& sim, const EnergyBalance& e, doubl
                        t, sim.steps(), sim.inverted_blocks(), b, m.block_elem_tag[b],
                        m.region_names[m.block_region[b]]);
   }
-  if (!std::isfinite(e.kinetic) || !std::isfinite(e.block_strain) || !std::isfinite(e.spring_strain)) {
-    std::size_t worst = 0;
+  // Every term of the balance (a NaN or infinite term makes its exact sum NaN: a load or a work
+  // that overflowed shows here even while the motion is still finite).
+  const std::pair<const char*, double> terms[] = {
+      {"kinetic", e.kinetic},         {"block_strain", e.block_strain},
+      {"spring_strain", e.spring_strain}, {"external_work", e.external_work},
+      {"gravity_work", e.gravity_work}, {"explosive_work", e.explosive_work},
+      {"damping", e.damping},         {"fracture", e.fracture},
+      {"insertion", e.insertion},     {"contact_strain", e.contact_strain},
+      {"contact_friction", e.contact_friction}, {"products_kinetic", e.products_kinetic}};
+  for (const auto& [name, value] : terms) {
+    if (std::isfinite(value)) continue;
     for (std::size_t n = 0; n < m.n_nodes(); ++n)
-      if (!std::isfinite(m.v[n].x + m.v[n].y + m.v[n].z)) {
-        worst = n;
-        break;
-      }
-    return fmt::format("at t = {:.6g} s (step {}): the state is not finite (NaN or Inf), first at "
-                       "node {} of {}",
-                       t, sim.steps(), worst, describe_node(m, worst));
+      if (!std::isfinite(m.v[n].x + m.v[n].y + m.v[n].z))
+        return fmt::format("at t = {:.6g} s (step {}): the state is not finite (NaN or Inf), first at "
+                           "node {} of {}",
+                           t, sim.steps(), n, describe_node(m, n));
+    return fmt::format("at t = {:.6g} s (step {}): the energy balance is not finite: its term {} is {} "
+                       "(energy.csv); a load or a work overflowed while the motion was still finite",
+                       t, sim.steps(), name, value);
   }
   const double input = std::abs(e.initial) + std::abs(e.external_work) + std::abs(e.gravity_work) +
                        std::abs(e.explosive_work) + std::abs(e.insertion);

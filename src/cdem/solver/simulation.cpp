@@ -407,10 +407,9 @@ void Simulation::step_sums(std::int64_t inv, std::int32_t first) {
   w_insert_ += sum[kInsertion];
   w_explosive_ += half * (sum[kExplosiveOld] + sum[kExplosiveNew]);
   last_explosive_ = half * sum[kExplosiveNew];
-  if (beta_max_ > 0) {
-    w_sdamp_ += half * (sum[kStiffOld] + sum[kStiffNew]);
-    last_sdamp_ = half * sum[kStiffNew];
-  }
+  // (every rank: a part without a damped block lists no terms, but the sums are the whole's)
+  w_sdamp_ += half * (sum[kStiffOld] + sum[kStiffNew]);
+  last_sdamp_ = half * sum[kStiffNew];
   inverted_ = static_cast<std::int64_t>(sum[kInverted]);
   // the first inverted block (the whole model's index): the least over the ranks
   if (halo_ && inverted_ > 0) {

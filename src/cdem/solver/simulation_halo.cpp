@@ -5,8 +5,8 @@
 // the whole model's bits (tests/verification/test_halo.cpp); the sums a step or a sample forms
 // over the model would not: they would run over the part's entities, ghosts included. So a part
 // lists only the terms of the entities it owns (own_masks), and its sums, exact (core/
-// exact_sum.hpp), are reduced over the ranks: two MPI_Allreduce of a few numbers per sum, the bits
-// one process gets, whatever the parts.
+// exact_sum.hpp), are reduced over the ranks: one MPI_Allreduce of the sums' bins, the bits one
+// process gets, whatever the parts.
 //
 // The whole model's Simulation then only holds the state for the run loop's outputs, analyses
 // and checkpoints: gather_parts fills it from the parts' own entities when the loop reads all of

@@ -155,7 +155,10 @@ void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<
 #endif
 }
 
-void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first) {
+namespace {
+// gather_all (to_root false) and gather_to_root (true)
+void gather_doubles(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first,
+                    bool to_root) {
   const int n = g_ranks.size;
   first.assign(static_cast<std::size_t>(n) + 1, 0);
 #ifdef CDEM_HAVE_MPI
@@ -166,17 +169,38 @@ void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::
     count.assign(static_cast<std::size_t>(n), 0);
     displ.assign(static_cast<std::size_t>(n), 0);
     const int c = static_cast<int>(mine.size());
-    MPI_Allgather(&c, 1, MPI_INT, count.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    for (int r = 0; r < n; ++r) first[r + 1] = first[r] + count[r];
-    if (first[n] > std::numeric_limits<int>::max()) throw std::runtime_error("gather_all: beyond 2^31 doubles in all");
-    for (int r = 0; r < n; ++r) displ[r] = static_cast<int>(first[r]);
-    all.resize(static_cast<std::size_t>(first[n]));
-    MPI_Allgatherv(mine.data(), c, MPI_DOUBLE, all.data(), count.data(), displ.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    if (to_root)
+      MPI_Gather(&c, 1, MPI_INT, count.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+    else
+      MPI_Allgather(&c, 1, MPI_INT, count.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    const bool receives = !to_root || g_ranks.rank == 0;
+    if (receives) {
+      for (int r = 0; r < n; ++r) first[r + 1] = first[r] + count[r];
+      if (first[n] > std::numeric_limits<int>::max()) throw std::runtime_error("gather_all: beyond 2^31 doubles in all");
+      for (int r = 0; r < n; ++r) displ[r] = static_cast<int>(first[r]);
+      all.resize(static_cast<std::size_t>(first[n]));
+    } else {
+      all.clear();
+    }
+    if (to_root)
+      MPI_Gatherv(mine.data(), c, MPI_DOUBLE, all.data(), count.data(), displ.data(), MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    else
+      MPI_Allgatherv(mine.data(), c, MPI_DOUBLE, all.data(), count.data(), displ.data(), MPI_DOUBLE, MPI_COMM_WORLD);
     return;
   }
 #endif
+  (void)to_root;
   all = mine;
   first[1] = static_cast<std::int64_t>(mine.size());
+}
+}  // namespace
+
+void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first) {
+  gather_doubles(mine, all, first, false);
+}
+
+void gather_to_root(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first) {
+  gather_doubles(mine, all, first, true);
 }
 
 std::int64_t max_over_ranks(std::int64_t v) {

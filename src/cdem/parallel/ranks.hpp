@@ -65,6 +65,9 @@ void exchange_with(const std::vector<int>& peers, const std::vector<std::vector<
 // Every rank's `mine`, concatenated in rank order, to every rank; `first` gets each rank's
 // offset in the result (size() + 1 entries). MPI_Allgather of the counts, MPI_Allgatherv.
 void gather_all(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first);
+// The same to rank 0 only (MPI_Gather of the counts, MPI_Gatherv); on the other ranks `all` is
+// empty and `first` all zeros.
+void gather_to_root(const std::vector<double>& mine, std::vector<double>& all, std::vector<std::int64_t>& first);
 // The largest of `v` over the ranks.
 std::int64_t max_over_ranks(std::int64_t v);
 // The collective of exact_sum.hpp's sums over the ranks (MPI_Allreduce, MPI_SUM of int64); null

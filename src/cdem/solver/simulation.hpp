@@ -154,17 +154,18 @@ class Simulation {
 
   // ---- The halo stage of a distributed run (parallel/halo.hpp; simulation_halo.cpp) ----
   // Makes this Simulation, set up from part `pm` of the model `whole` steps (with the whole's
-  // WholeModelSetup and time step), that part: the sums its step forms over the model (the
-  // boundary loads' work, the constrained vertices' reactions, the insertion energy, the
-  // inverted blocks) are then formed over the whole model's terms in the whole's order, each
-  // term from the rank that owns it (one gather of a few numbers per step). `part`: a part per
-  // block of the whole model, rank r stepping part r.
+  // WholeModelSetup and time step), that part: the sums its step and its samples form over the
+  // model (the works, the energies, the inverted blocks) then list only its own entities' terms,
+  // summed exactly and reduced over the ranks (step_sums, energy: the whole model's sums, the bits
+  // of one process). `part`: a part per block of the whole model, rank r stepping part r.
   void make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part);
   bool is_part() const { return halo_ != nullptr; }
-  // On the whole model's Simulation, on every rank at once: its state after the step the parts
-  // have just taken, from each part's own blocks, nodes, interfaces and vertices (one gather);
-  // `local` is this rank's part. `extra_local` / `extra_whole`: a per-node array carried along
-  // (the uplift maxima), local and whole; may be null.
+  // On the whole model's Simulation, every rank calling it at once: on rank 0, its state after
+  // the step the parts have just taken, from each part's own blocks, nodes, interfaces and
+  // vertices (one gather to rank 0, which writes the outputs and checkpoints); on every rank, the
+  // clock, the works and the inverted blocks (what the parts hold alike). `local` is this rank's
+  // part. `extra_local` / `extra_whole`: a per-node array carried along (the uplift maxima),
+  // local and whole; may be null.
   void gather_parts(const Simulation& local, const std::vector<double>* extra_local, std::vector<double>* extra_whole);
   // On the whole model's Simulation, on every rank at once (one small gather, from the part that
   // owns each): the stress of `blocks`, the velocity of `nodes` (and with !velocities_only their

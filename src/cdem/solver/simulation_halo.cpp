@@ -268,8 +268,20 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
 
   std::vector<double>& all = g.all;
   std::vector<std::int64_t>& at = g.at;
-  gather_all(buf, all, at);
+  // (to rank 0 alone, which writes the outputs and checkpoints; the other ranks' whole model keeps
+  // only what the parts hold alike, below)
+  gather_to_root(buf, all, at);
   Model& m = m_;
+  // What the parts hold alike (the step's sums were formed over the whole model: step_sums).
+  for (auto d : {&Simulation::t_, &Simulation::dt_, &Simulation::w_insert_, &Simulation::w_boundary_,
+                 &Simulation::w_absorbed_, &Simulation::w_explosive_, &Simulation::last_boundary_,
+                 &Simulation::last_absorbed_, &Simulation::last_explosive_, &Simulation::w_sdamp_,
+                 &Simulation::last_sdamp_})
+    this->*d = local.*d;
+  steps_ = local.steps_;
+  inverted_ = local.inverted_;
+  first_inverted_ = local.first_inverted_;
+  if (h.rank != 0) return;
   std::vector<std::uint8_t>& fresh_w = g.fresh_w;
   fresh_w.assign(m.tied ? m.n_ifaces() : 0, 0);
   for (int r = 0; r < h.ranks; ++r) {
@@ -326,15 +338,6 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
       for (int q = 0; q < 3; ++q) bc_.load_force[3 * static_cast<std::size_t>(i) + q] = get.v3();
     if (get.p != all.data() + at[r + 1]) throw std::logic_error("gather_parts: the parts' records do not match");
   }
-  // What the parts hold alike (the step's sums were formed over the whole model: step_sums).
-  for (auto d : {&Simulation::t_, &Simulation::dt_, &Simulation::w_insert_, &Simulation::w_boundary_,
-                 &Simulation::w_absorbed_, &Simulation::w_explosive_, &Simulation::last_boundary_,
-                 &Simulation::last_absorbed_, &Simulation::last_explosive_, &Simulation::w_sdamp_,
-                 &Simulation::last_sdamp_})
-    this->*d = local.*d;
-  steps_ = local.steps_;
-  inverted_ = local.inverted_;
-  first_inverted_ = local.first_inverted_;
   m.iface_normal_set = l.iface_normal_set;
   m.released_points = 0;
   for (auto st : m.sp_state) m.released_points += st == kReleased;

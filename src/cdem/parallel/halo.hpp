@@ -22,7 +22,7 @@
 //
 // Verified by tests/verification/test_halo.cpp (ghosts copied from a whole-model run) and
 // tests/mpi/test_halo_mpi.cpp (ghosts received over MPI); the run uses it through
-// solver/simulation_halo.cpp (the step's sums over the model in its order, the gathers) and
+// solver/simulation_halo.cpp (the parts' own entities for the exact sums, the gathers) and
 // run.cpp; the bar charges through solver/halo_charges.hpp. Not yet: contact, solid charges
 // (docs/parallel.md, the plan).
 #pragma once

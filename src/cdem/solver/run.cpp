@@ -145,9 +145,10 @@ RunResult run_case(const Case& c, const RunOptions& options) {
   SolidCharges& solids = pc.solids;
   const auto st = sim.stable();
   // The halo stage (parallel/halo.hpp, docs/parallel.md): each rank steps its METIS part and a
-  // ghost zone (`halo`), receives its ghosts' motion from their owners each step, and the whole
-  // model's state (`sim`, set up on every rank) is gathered from the parts when the loop reads
-  // it. A restart continues in the replicated stage (the checkpoint is the whole model's).
+  // ghost zone (`halo`), receives its ghosts' motion from their owners each step; the sums over
+  // the model are exact, reduced over the ranks, and the whole model's state (`sim`, set up on
+  // every rank) is gathered to rank 0 when it writes. A restart continues in the replicated stage
+  // (the checkpoint is the whole model's).
   PartitionQuality rank_q;
   std::vector<std::int32_t> rank_part;  // the rank stepping each block (partition.vtu)
   std::string ranks_mode = rk.size > 1 ? "replicated" : "one";

@@ -351,7 +351,7 @@ void Simulation::step_sums(std::int64_t inv, std::int32_t first) {
     kInverted, kSums
   };
   const OwnMasks own = own_masks();
-  auto mine = [](const std::uint8_t* mask, std::size_t i) { return mask == nullptr || mask[i] != 0; };
+  constexpr auto mine = &OwnMasks::mine;
   const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
     if (m_.tied) {
       for (auto v : con_vertices_)
@@ -498,7 +498,7 @@ EnergyBalance Simulation::energy() const {
   // the terms of the entities it owns (own_masks) and the sums are reduced over the ranks.
   enum : std::size_t { kKinetic, kDamping, kLastDamping, kBlockStrain, kSpringStrain, kFracture, kGravity, kProducts, kSums };
   const OwnMasks own = own_masks();
-  auto mine = [](const std::uint8_t* mask, std::size_t i) { return mask == nullptr || mask[i] != 0; };
+  constexpr auto mine = &OwnMasks::mine;
   const bool after_step = steps_ > 0;
   const std::vector<double> sum = sum_exactly(kSums, [&](auto&& put) {
     for (std::size_t v = 0; v < vtx_ke_.size(); ++v) {

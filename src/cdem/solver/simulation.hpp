@@ -125,6 +125,8 @@ class Simulation {
   // and vertices (per local entity, 1 own); null masks (every entity) for a whole model.
   struct OwnMasks {
     const std::uint8_t *block = nullptr, *node = nullptr, *iface = nullptr, *vertex = nullptr;
+    // entity i of a mask's kind is this Simulation's own
+    static bool mine(const std::uint8_t* mask, std::size_t i) { return mask == nullptr || mask[i] != 0; }
   };
   OwnMasks own_masks() const;
 

@@ -13,7 +13,6 @@
 // it, gather_sample the few entities a history sample reads.
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 #include "cdem/parallel/halo.hpp"
@@ -28,6 +27,7 @@ struct HaloIndex {
   std::vector<std::int32_t> part;  // per global block
   std::vector<std::int32_t> block, node, iface, vertex;  // local -> global (PartModel)
   std::vector<std::uint8_t> own_block, own_node, own_iface, own_vertex;  // per local entity
+  std::vector<std::int32_t> vertex_part;  // tied mode: per whole-model vertex, its owner (vertex_owner)
   // own entities' places in the whole's order, ascending: (whole's index, local index), of what
   // gather_parts carries besides the model: the boundary work nodes' v(n-1/2), the load facets'
   // forces
@@ -104,10 +104,10 @@ void Simulation::make_part(const Simulation& whole, const PartModel& pm, const s
   h->own_iface = own_interfaces(pm, m_, part, h->rank);
   const Model& w = whole.m_;
   if (m_.tied) {
-    const auto owner = vertex_owner(w, part);
+    h->vertex_part = vertex_owner(w, part);
     h->own_vertex.resize(m_.n_vertices());
     for (std::size_t v = 0; v < m_.n_vertices(); ++v)
-      h->own_vertex[v] = owner[static_cast<std::size_t>(pm.vertex[v])] == h->rank;
+      h->own_vertex[v] = h->vertex_part[static_cast<std::size_t>(pm.vertex[v])] == h->rank;
     for (auto lv : con_vertices_) {
       const auto gv = pm.vertex[static_cast<std::size_t>(lv)];
       const auto it = std::lower_bound(whole.con_vertices_.begin(), whole.con_vertices_.end(), gv);
@@ -197,7 +197,7 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
     for (std::size_t i = 0; i < m_.n_ifaces(); ++i)
       g->ifaces[static_cast<std::size_t>(h.part[static_cast<std::size_t>(m_.iface_block_a[i])])].push_back(static_cast<std::int32_t>(i));
     if (m_.tied) {
-      const auto owner = vertex_owner(m_, h.part);
+      const auto& owner = h.vertex_part;
       for (std::size_t v = 0; v < owner.size(); ++v) g->vertices[static_cast<std::size_t>(owner[v])].push_back(static_cast<std::int32_t>(v));
     }
     for (std::size_t i = 0; i < bc_.work_nodes.size(); ++i)
@@ -367,12 +367,7 @@ void Simulation::gather_sample(const Simulation& local, const std::vector<std::i
   };
   auto block_owner = [&](std::size_t b) { return h.part[b]; };
   auto node_owner = [&](std::int32_t n) { return block_owner(m_.node_block(static_cast<std::size_t>(n))); };
-  // (a vertex's owner: the part of the block of its lowest node, vertex_owner)
-  auto vertex_owner_of = [&](std::int32_t v) {
-    std::int32_t low = std::numeric_limits<std::int32_t>::max();
-    for (auto k = m_.vtx_offset[v]; k < m_.vtx_offset[v + 1]; ++k) low = std::min(low, m_.vtx_nodes[k]);
-    return node_owner(low);
-  };
+  auto vertex_owner_of = [&](std::int32_t v) { return h.vertex_part[static_cast<std::size_t>(v)]; };
   std::vector<double> buf;
   Put put{buf};
   for (auto b : blocks)

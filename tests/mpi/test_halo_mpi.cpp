@@ -60,7 +60,7 @@ TEST(HaloMpi, BarAcrossParts) {
   const Mesh mesh = load_mesh(c);
   PreparedCase ref = prepare_case(c, mesh), mine = prepare_case(c, mesh);
   add_charge_loads(ref);
-  HaloRun halo(c, mesh, mine.sim, mine.bars, ranks());
+  HaloRun halo(c, mesh, mine.sim, mine.bars, mine.solids, ranks());
   ASSERT_TRUE(halo.charges);
   // the bar's bound blocks in more than one part
   std::vector<int> seen(static_cast<std::size_t>(n), 0);

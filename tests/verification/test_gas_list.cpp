@@ -47,7 +47,7 @@ void check_cut_list(const std::string& path, const std::vector<std::string>& set
   std::int64_t steps = 0, whole_entries = 0, cut_entries = 0, crack_steps = 0;
   std::string failed;
   pc.sim.add_load([&](Model& m, AppliedLoads& out, double t) {
-    // the cut list, as a part owning every interface forms it (HaloBars::load)
+    // the cut list, as a part owning every interface forms it (HaloCharges::load_bars)
     BarCharges cut = pc.bars;
     CrackInputs given;
     const std::size_t nlist = m.tied ? m.active_ifaces.size() : m.n_ifaces();

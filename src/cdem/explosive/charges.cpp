@@ -617,7 +617,6 @@ SolidCharges build_solid_charges(const Model& m, const ChargeSpec& c) {
   return sc;
 }
 
-namespace {
 // A block's signed volume (area in 2D) now over its initial one: <= 0 once it has inverted.
 double current_volume_ratio(const Model& m, std::size_t b) {
   const auto n0 = m.block_first_node[b];
@@ -626,7 +625,6 @@ double current_volume_ratio(const Model& m, std::size_t b) {
   for (int k = 0; k < nn; ++k) p[k] = m.x[n0 + k];
   return signed_measure(m.block_type[b], std::span<const Vec3>(p, nn)) / m.block_volume0[b];
 }
-}  // namespace
 
 void products_leave_contact(Model& m, const SolidCharges& s) {
   if (s.block.empty()) return;
@@ -635,28 +633,44 @@ void products_leave_contact(Model& m, const SolidCharges& s) {
 }
 
 void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
-  // Decks with a gas body (gas = cavity or cracks): one pressure per deck from the burnt
-  // blocks' total volume (a collapsing block no longer gets the pressure of its own tiny volume).
-  if (sc.gas.any()) {
-    std::fill(sc.gas.burnt_volume.begin(), sc.gas.burnt_volume.end(), 0.0);
-    std::fill(sc.gas.cavity.begin(), sc.gas.cavity.end(), 0.0);
-    for (std::size_t i = 0; i < sc.block.size(); ++i) {
-      const double v = current_volume_ratio(m, sc.block[i]);
-      const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
-      sc.gas.burnt_volume[sc.charge[i]] += lam * sc.v0[i];
-      // a collapsed block has been let go with its products (booked as vented when it died)
-      if (!sc.dead[i]) sc.gas.cavity[sc.charge[i]] += lam * std::max(v, 0.0) * sc.v0[i];
-    }
-    update_gas(m, sc.gas, sc.eos, out, sc.t_last >= 0 ? t - sc.t_last : 0.0);
-  }
-  sc.t_last = t;
+  for (std::size_t i = 0; i < sc.block.size(); ++i) sc.v[i] = current_volume_ratio(m, sc.block[i]);
+  solid_gas_inputs(sc, t);
+  if (sc.gas.any()) update_gas(m, sc.gas, sc.eos, out, sc.t_last >= 0 ? t - sc.t_last : 0.0);
+  solid_state(m, sc, t);
   for (std::size_t i = 0; i < sc.block.size(); ++i) {
     const auto b = sc.block[i];
-    const double v = current_volume_ratio(m, b);
-    m.vol_ratio[b] = v;
-    sc.v[i] = v;
+    m.vol_ratio[b] = sc.v[i];
+    if (sc.died_now[i]) let_go_of_block(m, b);
+    const double pr = sc.p[i];
+    m.stress[b] = {-pr, -pr, -pr, 0, 0, 0};
+    if (pr > 0) inflate_block(m, b, pr, out);
+  }
+}
+
+void solid_gas_inputs(SolidCharges& sc, double t) {
+  // Decks with a gas body (gas = cavity or cracks): one pressure per deck from the burnt
+  // blocks' total volume (a collapsing block no longer gets the pressure of its own tiny volume).
+  if (!sc.gas.any()) return;
+  std::fill(sc.gas.burnt_volume.begin(), sc.gas.burnt_volume.end(), 0.0);
+  std::fill(sc.gas.cavity.begin(), sc.gas.cavity.end(), 0.0);
+  for (std::size_t i = 0; i < sc.block.size(); ++i) {
+    const double v = sc.v[i];
+    const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
+    sc.gas.burnt_volume[sc.charge[i]] += lam * sc.v0[i];
+    // a collapsed block has been let go with its products (booked as vented when it died)
+    if (!sc.dead[i]) sc.gas.cavity[sc.charge[i]] += lam * std::max(v, 0.0) * sc.v0[i];
+  }
+}
+
+void solid_state(const Model& m, SolidCharges& sc, double t) {
+  sc.t_last = t;
+  sc.died_now.assign(sc.block.size(), 0);
+  for (std::size_t i = 0; i < sc.block.size(); ++i) {
+    const auto b = sc.block[i];
+    const double v = sc.v[i];
     if (!sc.dead[i] && !(v > sc.min_volume_ratio)) {
       sc.dead[i] = 1;
+      sc.died_now[i] = 1;
       ++sc.dead_count;
       {  // its share of the deck's gas leaves with it
         GasBody& gb = sc.gas.bodies[sc.charge[i]];
@@ -667,30 +681,30 @@ void solid_loads(Model& m, SolidCharges& sc, AppliedLoads& out, double t) {
       spdlog::warn("t = {:.6g} s: explosive block {} (element {}) collapsed (volume ratio {:.3g}); "
                    "it stops carrying pressure and is let go of its neighbours",
                    t, b, m.block_elem_tag[b], v);
-      // Its unbreakable interfaces would otherwise keep pulling the rock blocks around it into
-      // the collapse (SPEC 5.2 study: a tied rock block inverted next). Their stored energy is
-      // booked as dissipated, so the energy balance stays closed.
-      for_each_block_spring(m, b, [&m](std::size_t sp) {
-        if (m.sp_state[sp] == kReleased) return;
-        if (m.tied) untie_point(m, sp);  // tied mode: its clusters split (ties.hpp)
-        m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
-                               0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
-        m.sp_state[sp] = kReleased;
-        ++m.released_points;
-        m.sp_fn[sp] = 0;
-        m.sp_fs[sp] = {};
-      });
     }
     const auto& ch = sc.charges[sc.charge[i]];
     const double lam = std::clamp((t - sc.t_ign[i]) / sc.burn_time[i], 0.0, 1.0);
     sc.lambda[i] = lam;
     const GasBody& gb = sc.gas.bodies[sc.charge[i]];
     const double p_products = gb.model == GasModel::Literal ? eos_pressure(sc.eos[ch.eos], v) : gb.pressure;
-    const double pr = (sc.dead[i] || lam <= 0) ? 0.0 : lam * p_products;
-    sc.p[i] = pr;
-    m.stress[b] = {-pr, -pr, -pr, 0, 0, 0};
-    if (pr > 0) inflate_block(m, b, pr, out);
+    sc.p[i] = (sc.dead[i] || lam <= 0) ? 0.0 : lam * p_products;
   }
+}
+
+void let_go_of_block(Model& m, std::int32_t b) {
+  // Its unbreakable interfaces would otherwise keep pulling the rock blocks around it into
+  // the collapse (SPEC 5.2 study: a tied rock block inverted next). Their stored energy is
+  // booked as dissipated, so the energy balance stays closed.
+  for_each_block_spring(m, b, [&m](std::size_t sp) {
+    if (m.sp_state[sp] == kReleased) return;
+    if (m.tied) untie_point(m, sp);  // tied mode: its clusters split (ties.hpp)
+    m.sp_dissipated[sp] += 0.5 * m.sp_fn[sp] * m.sp_fn[sp] / m.sp_kn[sp] +
+                           0.5 * dot(m.sp_fs[sp], m.sp_fs[sp]) / m.sp_ks[sp];
+    m.sp_state[sp] = kReleased;
+    ++m.released_points;
+    m.sp_fn[sp] = 0;
+    m.sp_fs[sp] = {};
+  });
 }
 
 std::string charge_csv_header() {

@@ -112,6 +112,7 @@ struct SolidCharges {
   std::vector<std::int32_t> block, charge;  // per explosive block
   std::vector<double> t_ign, burn_time, p, lambda, v0, v;  // v0: initial volume, v: V / V0
   std::vector<std::uint8_t> dead;
+  std::vector<std::uint8_t> died_now;  // per explosive block: collapsed at the last step (solid_state)
   GasField gas;              // the decks' gas bodies (hole gas = cavity or cracks; gas.hpp)
   double t_last = -1;        // time of the last solid_loads call
   double min_volume_ratio = 0.05;
@@ -125,8 +126,23 @@ struct SolidCharges {
 // an explosive block outside every solid-model deck, or a solid-model hole with no blocks.
 SolidCharges build_solid_charges(const Model& m, const ChargeSpec& c);
 
-// Loads the rock from the explosive blocks at time t.
+// Loads the rock from the explosive blocks at time t: each block's volume ratio into s.v,
+// solid_gas_inputs, the gas (update_gas), solid_state, then per explosive block in order its
+// volume ratio, a collapse's let_go_of_block, its stress and its inflation (inflate_block).
+// A distributed run's part does the same from the volume ratios its owners formed
+// (solver/halo_charges.hpp).
 void solid_loads(Model& m, SolidCharges& s, AppliedLoads& out, double t);
+// The gas bodies' burnt volume and cavity from the explosive blocks' volume ratios s.v at time t.
+void solid_gas_inputs(SolidCharges& s, double t);
+// After the gas state at time t: per explosive block its collapse (s.dead, s.died_now, the gas it
+// takes with it; reported once), burnt fraction and pressure s.p. Reads s.v; of m only its
+// element tags (the report).
+void solid_state(const Model& m, SolidCharges& s, double t);
+// A collapsed explosive block lets go of its neighbours: its points released (their stored
+// energy booked as dissipated), tied mode its clusters split.
+void let_go_of_block(Model& m, std::int32_t b);
+// A block's signed volume (area in 2D) now over its initial one: <= 0 once it has inverted.
+double current_volume_ratio(const Model& m, std::size_t b);
 // A solid charge's explosive blocks are its products, a gas glued to the hole's wall by
 // unbreakable interfaces: they take no part in general contact (Model::no_contact), from the
 // start. (Their nodes were contact candidates once: the node at an open collar, driven out at

@@ -160,7 +160,7 @@ RunResult run_case(const Case& c, const RunOptions& options) {
       throw InputError(fmt::format("--ranks-mode halo: the halo stage does not step {} yet", why));
     if (!why.empty() && !opt.quiet) spdlog::info("ranks: the replicated stage, as the halo stage does not step {} yet", why);
     if (why.empty()) {
-      halo.emplace(c, mesh, sim, bars, rk);
+      halo.emplace(c, mesh, sim, bars, solids, rk);
       rank_q = halo->quality;
       rank_part = halo->part;
       ranks_mode = "halo";

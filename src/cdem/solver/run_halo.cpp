@@ -7,26 +7,24 @@
 namespace cdem {
 
 std::string halo_unsupported(const Case& c) {
-  for (const auto& h : c.holes)
-    if (h.model == ChargeModel::Solid) return "solid charges (their explosive blocks and gas span the parts)";
   if (c.contact.enabled) return "general contact (its candidates need a ghost zone of a skin's width)";
-  for (const auto& mt : c.materials)
-    if (!mt.explosive.empty()) return "explosive blocks (solid charges)";
   return "";
 }
 
-HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, const RankInfo& rk) {
+HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, SolidCharges& solids,
+                 const RankInfo& rk) {
   const Model& m = whole.model();
   const BlockGraph g = block_graph(m);
   part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
   quality = partition_quality(g, part, rk.size, {});
   // (the model as prepare_case makes it before its Simulation: the bars' blocks changed by their
-  // charges, the same on every rank as on one process)
+  // charges, the explosive blocks out of contact, the same on every rank as on one process)
   Model before = build_case_model(c, mesh);
   if (!bars.empty()) {
     BarCharges again = build_bar_charges(before, charge_spec(c));
     make_charge_cavities(before, again);
   }
+  products_leave_contact(before, solids);
   PartModel pm = cut_part(before, part, rk.rank);
   own_blocks = pm.own_blocks;
   ghost_blocks = pm.ghost_blocks;
@@ -40,9 +38,12 @@ HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCh
     for (auto n : pm.node) ws.damping.push_back(m.damping[static_cast<std::size_t>(n)]);
   sim = std::make_unique<Simulation>(std::move(pm.model), part_case, &ws);
   sim->make_part(whole, pm, part);
-  if (!bars.empty()) {
-    charges = std::make_unique<HaloBars>(bars, m, pm, sim->model(), part, rk.rank);
-    sim->add_load([hb = charges.get()](Model& l, AppliedLoads& out, double t) { hb->load(l, out, t); });
+  if (!bars.empty() || !solids.empty()) {
+    charges = std::make_unique<HaloCharges>(bars, solids, m, pm, sim->model(), part, rk.rank);
+    // (one process's hooks: the bars', then the solid charges', run_setup.cpp)
+    if (!bars.empty()) sim->add_load([hc = charges.get()](Model& l, AppliedLoads& out, double t) { hc->load_bars(l, out, t); });
+    if (!solids.empty())
+      sim->add_load([hc = charges.get()](Model& l, AppliedLoads& out, double t) { hc->load_solids(l, out, t); });
   }
   exchange->exchange(sim->model());  // (the set-up's cluster velocities of the ghosts)
   uplift = UpliftTracker(sim->model(), up_direction(m, c.analysis.up), 0);

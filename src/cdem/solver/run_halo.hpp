@@ -21,16 +21,17 @@ namespace cdem {
 struct HaloRun {
   std::unique_ptr<Simulation> sim;
   std::unique_ptr<HaloExchange> exchange;
-  std::unique_ptr<HaloBars> charges;  // the bars' state, stepped on every rank (halo_charges.hpp)
+  std::unique_ptr<HaloCharges> charges;  // the charges' state, stepped on every rank (halo_charges.hpp)
   UpliftTracker uplift{Model{}, Vec3{0, 0, 1}, 0};
   std::vector<std::int32_t> part;  // the rank stepping each block of the whole model
   PartitionQuality quality;
   std::size_t own_blocks = 0, ghost_blocks = 0;
 
   // METIS parts of `whole` (ranges of the block order without METIS), one per rank; this rank's
-  // cut from the case's model and set up. `bars`: the whole model's bar charges, whose state every
-  // rank steps (kept by the caller).
-  HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, const RankInfo& rk);
+  // cut from the case's model and set up. `bars`, `solids`: the whole model's charges, whose state
+  // every rank steps (kept by the caller).
+  HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, SolidCharges& solids,
+          const RankInfo& rk);
   // One step of the part, then its ghosts' motion from their owners.
   void step(bool sample);
 };

@@ -86,7 +86,7 @@ struct Get {
 
 void Simulation::make_part(const Simulation& whole, const PartModel& pm, const std::vector<std::int32_t>& part) {
   if (!loads_.empty() || contact_.enabled || !rank_blocks_.empty())
-    throw std::logic_error("Simulation::make_part: a part takes its charges' load hook after this (HaloBars), "
+    throw std::logic_error("Simulation::make_part: a part takes its charges' load hook after this (HaloCharges), "
                            "and no contact yet");
   auto h = std::make_shared<HaloIndex>();
   h->rank = ranks().rank;

@@ -218,6 +218,15 @@ EOF
 "$BIN" check "${H3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the 3D box's stage"
 "$BIN" check "${B3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the bar box's stage"
 "$BIN" check "${S3[@]}" --parts 3 | grep -q "mpirun -np 3: the halo stage" || fail "check --parts: the solid box's stage"
+# ... and prints the partition the run steps: the bar box's imbalance and split charges on 3 ranks
+"$BIN" check "${B3[@]}" --parts 3 > "$TMP/check_b3"
+"$PY" - "$TMP/check_b3" "$TMP/h_B3_3/summary.json" <<'EOF' || fail "check --parts 3 does not print the 3-rank run's partition"
+import json, re, sys
+text, s = open(sys.argv[1]).read(), json.load(open(sys.argv[2]))
+m = re.search(r"^partition .*load imbalance ([0-9.]+).*; (\d+) of the charges split", text, re.M)
+assert m, text
+assert m.group(1) == f"{s['ranks_imbalance']:.3f}" and int(m.group(2)) == s["ranks_charges_split"], (m.groups(), s["ranks_imbalance"], s["ranks_charges_split"])
+EOF
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
   fail "check --parts: the 2D bar case's stage (contact)"
 echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping, everywhere or in one region, on 3; unstable on 2), a 3D bar and 2D and 3D solid charges across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box, the 2D solid charge) continued on 3 ranks"

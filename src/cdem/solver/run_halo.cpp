@@ -11,12 +11,16 @@ std::string halo_unsupported(const Case& c) {
   return "";
 }
 
+std::vector<std::int32_t> halo_parts(const Model& m, int parts) {
+  const BlockGraph g = block_graph(m);
+  return have_metis() ? partition_kway(g, parts) : ranges_to_parts(block_ranges(g, parts));
+}
+
 HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, SolidCharges& solids,
                  const RankInfo& rk) {
   const Model& m = whole.model();
-  const BlockGraph g = block_graph(m);
-  part = have_metis() ? partition_kway(g, rk.size) : ranges_to_parts(block_ranges(g, rk.size));
-  quality = partition_quality(g, part, rk.size, {});
+  part = halo_parts(m, rk.size);
+  quality = partition_quality(block_graph(m), part, rk.size, charge_groups(m.n_blocks(), bars, solids));
   // (the model as prepare_case makes it before its Simulation: the bars' blocks changed by their
   // charges, the explosive blocks out of contact, the same on every rank as on one process)
   Model before = build_case_model(c, mesh);

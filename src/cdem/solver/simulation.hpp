@@ -169,11 +169,13 @@ class Simulation {
   // part. `extra_local` / `extra_whole`: a per-node array carried along (the uplift maxima),
   // local and whole; may be null.
   void gather_parts(const Simulation& local, const std::vector<double>* extra_local, std::vector<double>* extra_whole);
-  // On the whole model's Simulation, on every rank at once (one small gather, from the part that
-  // owns each): the stress of `blocks`, the velocity of `nodes` (and with !velocities_only their
-  // positions and forces), and the clusters (tied mode: node lists and runs) of `vertices`; each
-  // list ascending, without repeats. What a history sample reads besides the exact sums: the
-  // monitors, and the reactions (their velocities before a sampled step, then after it).
+  // On the whole model's Simulation, every rank calling it at once (one small gather to rank 0,
+  // from the part that owns each): on rank 0, the stress of `blocks`, the velocity of `nodes` (and
+  // with !velocities_only their positions and forces), and the clusters (tied mode: node lists and
+  // runs) of `vertices`; each list ascending, without repeats. What a history sample writes
+  // besides the exact sums: the monitors, and the reactions (their velocities before a sampled
+  // step, then after it). No rank decides anything from them (the stability check's decisions come
+  // from the sums), so the other ranks only send.
   void gather_sample(const Simulation& local, const std::vector<std::int32_t>& blocks,
                      const std::vector<std::int32_t>& nodes, const std::vector<std::int32_t>& vertices,
                      bool velocities_only);

@@ -388,7 +388,8 @@ void Simulation::gather_sample(const Simulation& local, const std::vector<std::i
   }
   std::vector<double> all;
   std::vector<std::int64_t> at;
-  gather_all(buf, all, at);
+  gather_to_root(buf, all, at);
+  if (h.rank != 0) return;  // (rank 0 alone writes what a sample reads)
   std::vector<Get> from;
   for (int r = 0; r < h.ranks; ++r) from.push_back(Get{all.data() + at[r]});
   for (auto b : blocks) m_.stress[static_cast<std::size_t>(b)] = from[static_cast<std::size_t>(block_owner(static_cast<std::size_t>(b)))].s6();

@@ -23,13 +23,16 @@ HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCh
   quality = partition_quality(block_graph(m), part, rk.size, charge_groups(m.n_blocks(), bars, solids));
   // (the model as prepare_case makes it before its Simulation: the bars' blocks changed by their
   // charges, the explosive blocks out of contact, the same on every rank as on one process)
-  Model before = build_case_model(c, mesh);
-  if (!bars.empty()) {
-    BarCharges again = build_bar_charges(before, charge_spec(c));
-    make_charge_cavities(before, again);
-  }
-  products_leave_contact(before, solids);
-  PartModel pm = cut_part(before, part, rk.rank);
+  // (a whole model more while the part is cut: freed before the part is set up)
+  PartModel pm = [&] {
+    Model before = build_case_model(c, mesh);
+    if (!bars.empty()) {
+      BarCharges again = build_bar_charges(before, charge_spec(c));
+      make_charge_cavities(before, again);
+    }
+    products_leave_contact(before, solids);
+    return cut_part(before, part, rk.rank);
+  }();
   own_blocks = pm.own_blocks;
   ghost_blocks = pm.ghost_blocks;
   exchange = std::make_unique<HaloExchange>(pm, part);

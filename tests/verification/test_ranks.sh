@@ -138,14 +138,6 @@ for c in P2 H3 R3 B3 S2 S3; do
 done
 "$PY" -c "import json,sys; sys.exit(0 if all(json.load(open(p))['collapsed_explosive_blocks'] > 0 for p in sys.argv[1:]) else 'no collapse')" \
   "$TMP/h_S2_1/summary.json" "$TMP/h_S3_1/summary.json" || fail "the solid charges: no explosive block collapsed"
-# ranks and threads together: 2 ranks of 2 threads each, the bar box and the solid box
-for c in B3 S3; do
-  declare -n args=$c
-  "${MPIRUN[@]}" -np 2 "$BIN" run "${args[@]}" -o "$TMP/h_${c}_2x2" -t 2 --fixed-threads -q 2> "$TMP/log_h" ||
-    { cat "$TMP/log_h"; fail "$c on 2 ranks x 2 threads"; }
-  same "$TMP/h_${c}_1" "$TMP/h_${c}_2x2"
-  unset -n args
-done
 # the springs mode (the 3D box: with velocity constraints at its base, their reactions' work)
 for c in P2 H3 B3 S3; do
   declare -n args=$c
@@ -237,7 +229,7 @@ assert m.group(1) == f"{s['ranks_imbalance']:.3f}" and int(m.group(2)) == s["ran
 EOF
 "$BIN" check "${C2[@]}" --parts 3 | grep -q "the replicated stage (the halo stage does not step general contact" ||
   fail "check --parts: the 2D bar case's stage (contact)"
-echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping, everywhere or in one region, on 3; unstable on 2), a 3D bar and 2D and 3D solid charges across the parts, on 1-4 ranks (and 2 ranks x 2 threads) identical; replicated the same; halo checkpoints (the 3D box, the bar box, the 2D solid charge) continued on 3 ranks"
+echo "halo stage: 2D (tied, springs), 3D (tied; springs on 3; stiffness damping, everywhere or in one region, on 3; unstable on 2), a 3D bar and 2D and 3D solid charges across the parts, on 1-4 ranks identical; replicated the same; halo checkpoints (the 3D box, the bar box, the 2D solid charge) continued on 3 ranks"
 
 # Errors end every rank (no hang: each under a time bound) with exit code 2 and the message:
 # a missing case (every rank meets it), a run directory holding another run (rank 0 alone meets

@@ -343,7 +343,9 @@ void Simulation::gather_parts(const Simulation& local, const std::vector<double>
   for (auto st : m.sp_state) m.released_points += st == kReleased;
   if (m.tied) {
     // the active list as one process has it after the step: ascending, then the interfaces
-    // activated in the step (tie_failure, in ascending order)
+    // activated in the step (tie_failure, in ascending order). A solid charge's collapse in the
+    // step activates its interfaces in the load hook, so their order here may differ from one
+    // process's (the same set; loading a checkpoint sorts the list again)
     m.active_ifaces.clear();
     for (std::size_t i = 0; i < m.n_ifaces(); ++i)
       if (m.iface_active[i] && !fresh_w[i]) m.active_ifaces.push_back(static_cast<std::int32_t>(i));

@@ -55,7 +55,7 @@ void print_partition(const cdem::Case& c, const cdem::PreparedCase& pc, int part
     return;
   }
   // (the halo stage's partition, as `run` makes it; the charges split counted for the record)
-  const auto part = cdem::halo_parts(m, parts);
+  const auto part = cdem::halo_parts(g, parts);
   const auto q = cdem::partition_quality(g, part, parts, groups);
   fmt::print("partition   {} parts (METIS k-way): {} to {} blocks, load imbalance {:.3f}, {} interfaces "
              "cut ({:.2f} %), ghost blocks (the halo stage's vertex ring) {:.0f} (mean) / {} (max) per part, "

@@ -11,16 +11,16 @@ std::string halo_unsupported(const Case& c) {
   return "";
 }
 
-std::vector<std::int32_t> halo_parts(const Model& m, int parts) {
-  const BlockGraph g = block_graph(m);
+std::vector<std::int32_t> halo_parts(const BlockGraph& g, int parts) {
   return have_metis() ? partition_kway(g, parts) : ranges_to_parts(block_ranges(g, parts));
 }
 
 HaloRun::HaloRun(const Case& c, const Mesh& mesh, const Simulation& whole, BarCharges& bars, SolidCharges& solids,
                  const RankInfo& rk) {
   const Model& m = whole.model();
-  part = halo_parts(m, rk.size);
-  quality = partition_quality(block_graph(m), part, rk.size, charge_groups(m.n_blocks(), bars, solids));
+  const BlockGraph g = block_graph(m);
+  part = halo_parts(g, rk.size);
+  quality = partition_quality(g, part, rk.size, charge_groups(m.n_blocks(), bars, solids));
   // (the model as prepare_case makes it before its Simulation: the bars' blocks changed by their
   // charges, the explosive blocks out of contact, the same on every rank as on one process)
   // (a whole model more while the part is cut: freed before the part is set up)

@@ -15,11 +15,11 @@
 
 namespace cdem {
 
-// The halo stage's parts of model m (set up), one per rank: METIS k-way on its block graph
-// (ranges of the block order without METIS). A charge's blocks are not kept together: the
+// The halo stage's parts of a model (set up), one per rank, from its block graph g (block_graph
+// without charge groups): METIS k-way (ranges of the block order without METIS). A charge's blocks are not kept together: the
 // charges' state is stepped on every rank (halo_charges.hpp), so nothing depends on it, and the
 // tests need charges across parts. `check --parts` prints this partition.
-std::vector<std::int32_t> halo_parts(const Model& m, int parts);
+std::vector<std::int32_t> halo_parts(const BlockGraph& g, int parts);
 
 // This rank's part of the model with its ghost zone, set up from the same case with the whole
 // model's time step, damping and frequency bound (`whole`); the exchange of its ghosts' motion;

@@ -85,9 +85,8 @@ struct HaloBeside {
     const Model& l = part.model();
     const Model& w = ref.sim.model();
     auto fail = ::testing::AssertionFailure();
-    bool ok = l.n_blocks() == gblock.size() && l.n_nodes() == gnode.size();
-    if (!ok) return fail << "the part is not the run's cut";
-    for (std::size_t lb = 0; lb < gblock.size() && ok; ++lb) {
+    if (l.n_blocks() != gblock.size() || l.n_nodes() != gnode.size()) return fail << "the part is not the run's cut";
+    for (std::size_t lb = 0; lb < gblock.size(); ++lb) {
       if (!own[lb]) continue;
       const auto g = static_cast<std::size_t>(gblock[lb]);
       if (!halo_check::same(l.stress[lb], w.stress[g])) return fail << "block " << g << "'s stress, step " << steps;
